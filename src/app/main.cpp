@@ -1,0 +1,67 @@
+// centridem: command line. Exit codes: 0 success, 2 bad input, 3 the run went
+// unstable, 1 any other failure.
+#include "core/errors.hpp"
+#include "procedures/bench.hpp"
+
+#include <CLI/CLI.hpp>
+#include <cstdio>
+#include <fmt/format.h>
+
+using namespace centridem;
+
+namespace {
+
+int run_bench_command(const BenchOptions& o) {
+  for (int t : o.threads) {
+    const BenchResult r = run_bench(o, t);
+    fmt::print("threads: {}\nparticles: {}\nsteps: {}\nwall_seconds: {:.3f}\n"
+               "contacts_per_particle: {:.3f}\nneighbour_entries_per_particle: {:.3f}\n"
+               "bytes_per_particle: {}\nneighbour_rebuilds: {}\nparticle_steps_per_s: {:.4g}\n\n",
+               r.threads, r.particles, r.steps, r.wall_seconds, r.contacts_per_particle,
+               r.neighbours_per_particle, r.bytes_per_particle, r.rebuilds, r.particle_steps_per_s);
+    std::fflush(stdout);
+  }
+  return 0;
+}
+
+} // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"centridem: 3D DEM for geotechnical centrifuge modelling"};
+  app.require_subcommand(1);
+
+  BenchOptions bench;
+  auto* cmd_bench = app.add_subcommand("bench", "throughput benchmark on the shared packing");
+  cmd_bench->add_option("--packing", bench.packing, "packing file (x y z r per line, SI)")
+      ->capture_default_str();
+  cmd_bench->add_option("--steps", bench.steps, "timed steps")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  cmd_bench->add_option("--warmup", bench.warmup_steps, "untimed steps first")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+  cmd_bench->add_option("--threads", bench.threads, "thread counts to run, one run each")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    const int rc = app.exit(e);
+    return rc == 0 ? 0 : 2;
+  }
+
+  try {
+    if (*cmd_bench) return run_bench_command(bench);
+  } catch (const InputError& e) {
+    fmt::print(stderr, "centridem: error: {}\n", e.what());
+    return 2;
+  } catch (const InstabilityError& e) {
+    fmt::print(stderr, "centridem: unstable: {}\n", e.what());
+    return 3;
+  } catch (const std::exception& e) {
+    fmt::print(stderr, "centridem: error: {}\n", e.what());
+    return 1;
+  }
+  return 0;
+}

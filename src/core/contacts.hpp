@@ -1,0 +1,53 @@
+// Contact stores. Ball-ball contacts live in a half neighbour list (pairs
+// i < j) in compressed rows by particle i; each neighbour entry carries the
+// contact's history and this step's result, so history needs no hashing and
+// survives rebuilds by a sorted merge (World::rebuild). Ball-wall contacts
+// live in rows by particle too. An entry whose `properties` is kNoContact is
+// a neighbour that is not touching.
+#pragma once
+
+#include "core/vec3.hpp"
+#include "physics/contact_law.hpp"
+
+#include <cstdint>
+#include <vector>
+
+namespace centridem {
+
+inline constexpr std::uint16_t kNoContact = 0xFFFF;
+
+struct BallBallContacts {
+  std::vector<std::uint32_t> row_offset; // size n+1
+  std::vector<std::uint32_t> other;      // j of each entry (j > i)
+  std::vector<std::uint16_t> properties; // property-set index, or kNoContact
+  std::vector<ContactState> state;       // history
+  std::vector<Vec3> force_on_2;          // this step's force on j [N]
+  std::vector<Vec3> moment_on_1;         // this step's total moment on i [N m]
+  std::vector<Vec3> moment_on_2;         // this step's total moment on j [N m]
+  // Transpose: for particle j, the entries in which it is the second end.
+  std::vector<std::uint32_t> incoming_offset; // size n+1
+  std::vector<std::uint32_t> incoming;        // entry indices
+
+  std::size_t entries() const { return other.size(); }
+  static constexpr std::size_t bytes_per_entry() {
+    return sizeof(std::uint32_t) * 2 + sizeof(std::uint16_t) + sizeof(ContactState) +
+           3 * sizeof(Vec3);
+  }
+};
+
+struct BallWallContacts {
+  std::vector<std::uint32_t> row_offset; // size n+1
+  std::vector<std::uint16_t> wall;       // wall index of each entry
+  std::vector<std::uint16_t> properties; // property-set index, or kNoContact
+  std::vector<ContactState> state;       // history (end 1 = ball, end 2 = wall)
+  std::vector<Vec3> force_on_wall;       // this step's force on the wall [N]
+  std::vector<Vec3> moment_on_ball;      // this step's total moment on the ball [N m]
+
+  std::size_t entries() const { return wall.size(); }
+  static constexpr std::size_t bytes_per_entry() {
+    return sizeof(std::uint32_t) + 2 * sizeof(std::uint16_t) + sizeof(ContactState) +
+           2 * sizeof(Vec3);
+  }
+};
+
+} // namespace centridem

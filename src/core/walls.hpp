@@ -1,0 +1,62 @@
+// Rigid walls: infinite planes (one-sided half-spaces) and finite rectangles
+// (two-sided plates whose faces, edges and corners all make contacts). Walls
+// move with a prescribed translational velocity; a wall is the
+// infinite-radius, infinite-mass limit of a ball for the contact law.
+#pragma once
+
+#include "core/vec3.hpp"
+
+#include <algorithm>
+#include <cstdint>
+#include <string>
+
+namespace centridem {
+
+enum class WallShape : std::uint8_t { plane, rectangle };
+
+struct Wall {
+  std::string name;
+  WallShape shape = WallShape::plane;
+  Vec3 point;                        // plane: any point on it; rectangle: its centre [m]
+  Vec3 normal{0, 0, 1};              // unit normal; for a plane, the side balls live on
+  Vec3 axis_u, axis_v;               // rectangle: unit in-plane edge directions
+  double half_u = 0.0, half_v = 0.0; // rectangle: half edge lengths [m]
+  Vec3 velocity;                     // prescribed translational velocity [m/s]
+  Vec3 force;                        // measured: total force the balls exert on the wall [N]
+  std::uint16_t properties = 0;      // index of its current default contact properties
+  std::uint32_t contact_count = 0;   // measured: active ball-wall contacts
+
+  static Wall plane(std::string name, const Vec3& point, const Vec3& normal);
+  // Rectangle from its centre, normal and one edge direction (u); v = n x u.
+  static Wall rectangle(std::string name, const Vec3& centre, const Vec3& normal,
+                        const Vec3& u_direction, double length_u_m, double length_v_m);
+};
+
+// Closest point of the wall's surface to x, and the vector from it to x.
+struct WallProximity {
+  Vec3 closest;    // on the wall surface [m]
+  Vec3 to_centre;  // x - closest [m]
+  double distance; // |x - closest|, signed for planes (negative behind) [m]
+};
+
+inline WallProximity wall_proximity(const Wall& w, const Vec3& x) {
+  const Vec3 r = x - w.point;
+  if (w.shape == WallShape::plane) {
+    const double s = dot(r, w.normal);
+    return {x - s * w.normal, s * w.normal, s};
+  }
+  const double a = std::clamp(dot(r, w.axis_u), -w.half_u, w.half_u);
+  const double b = std::clamp(dot(r, w.axis_v), -w.half_v, w.half_v);
+  const Vec3 q = w.point + a * w.axis_u + b * w.axis_v;
+  const Vec3 d = x - q;
+  return {q, d, norm(d)};
+}
+
+// Unit normal from a ball centre x towards the wall, given its proximity.
+inline Vec3 ball_to_wall_normal(const Wall& w, const WallProximity& p) {
+  if (w.shape == WallShape::plane) return -w.normal;
+  if (p.distance > 0.0) return p.to_centre * (-1.0 / p.distance);
+  return -w.normal; // centre exactly on the plate: push along the normal
+}
+
+} // namespace centridem

@@ -1,0 +1,188 @@
+// The World: particles, walls, contacts, body field and contact defaults, and
+// the cycle that advances them. Procedures drive a World only through these
+// public calls; they never reach into the loops.
+#pragma once
+
+#include "core/contacts.hpp"
+#include "core/particles.hpp"
+#include "core/walls.hpp"
+#include "physics/body_field.hpp"
+#include "physics/contact_properties.hpp"
+
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace centridem {
+
+struct WorldSettings {
+  double local_damping = 0.0;          // alpha, Cundall local damping (PFC `damp`) [-]
+  double timestep_s = 0.0;             // fixed timestep; 0 = automatic [s]
+  double timestep_safety_factor = 0.8; // automatic dt = factor x critical estimate [-]
+  double timestep_growth_limit = 0.05; // automatic dt grows at most this fraction per step [-]
+  int timestep_update_interval = 100;  // steps between critical-timestep estimates
+  double neighbour_skin_m = 0.0;       // Verlet skin; 0 = half the smallest radius [m]
+  double max_overlap_fraction = 0.5;   // instability guard: overlap / smaller radius [-]
+  int threads = 0;                     // OpenMP threads; 0 = the OpenMP default
+};
+
+void validate(const WorldSettings& s);
+
+// A box region [lo, hi] (axis aligned) [m].
+struct Box {
+  Vec3 lo, hi;
+  bool contains(const Vec3& x) const {
+    return x.x >= lo.x && x.x <= hi.x && x.y >= lo.y && x.y <= hi.y && x.z >= lo.z && x.z <= hi.z;
+  }
+  double volume() const { return (hi.x - lo.x) * (hi.y - lo.y) * (hi.z - lo.z); }
+};
+
+struct Energy {
+  double kinetic_J = 0;        // 1/2 m v^2 summed
+  double rotational_J = 0;     // 1/2 I w^2 summed
+  double strain_normal_J = 0;  // 1/2 kn delta^2 over active contacts
+  double strain_shear_J = 0;   // |Fs|^2 / (2 ks)
+  double strain_rolling_J = 0; // |Mr|^2 / (2 kr)
+  double total() const {
+    return kinetic_J + rotational_J + strain_normal_J + strain_shear_J + strain_rolling_J;
+  }
+};
+
+struct Measurements {
+  long step = 0;
+  double time_s = 0;
+  double timestep_s = 0;
+  std::size_t particles = 0;
+  std::size_t ball_ball_contacts = 0;
+  std::size_t ball_wall_contacts = 0;
+  double coordination_number = 0;         // (2 Nbb + Nbw) / N
+  double mean_unbalanced_force_ratio = 0; // PFC `mech.ratio.avg`
+  double kinetic_energy_J = 0;            // translational + rotational
+  double max_overlap_ratio = 0;           // largest overlap / smaller radius
+};
+
+struct RegionMeasurement {
+  std::size_t particles = 0;         // particles whose centre is in the box
+  double porosity = 0;               // 1 - (their volume)/(box volume), centre-based
+  std::array<double, 9> stress_Pa{}; // mean stress tensor, row major, tension positive
+  double mean_pressure_Pa = 0;       // -trace/3 (compression positive)
+};
+
+// One active ball-ball contact, for output (force chains) and tests.
+struct ContactView {
+  std::uint32_t i, j; // particle indices (current order)
+  Vec3 point;         // contact point [m]
+  Vec3 normal;        // i -> j
+  Vec3 force_on_j;    // [N]
+  double overlap_m;
+  std::uint16_t properties;
+};
+
+class World {
+public:
+  explicit World(WorldSettings settings = {});
+
+  const WorldSettings& settings() const { return settings_; }
+  void set_local_damping(double alpha);
+  void set_fixed_timestep(double dt_s); // 0 = automatic
+
+  // --- particles -----------------------------------------------------------
+  const ParticleStore& particles() const { return p_; }
+  // Mutable access for set-up (velocities, flags, applied forces). After
+  // moving particles or changing radii call particles_changed().
+  ParticleStore& particles_mut() { return p_; }
+  void particles_changed() { dirty_ = true; }
+  std::size_t add_particle(const Vec3& x, double radius_m, double density_kg_m3,
+                           std::int32_t group = 0, std::optional<std::int64_t> id = {});
+  // Removes every particle for which remove(index) is true; returns how many.
+  std::size_t remove_particles(const std::function<bool(std::size_t)>& remove);
+  // Current index of a particle id (linear search; not for loops).
+  std::optional<std::size_t> index_of(std::int64_t id) const;
+  void reset_displacements();
+
+  // --- walls -----------------------------------------------------------------
+  std::size_t add_wall(Wall wall, const ContactProperties& defaults);
+  void remove_wall(const std::string& name);
+  std::size_t wall_index(const std::string& name) const; // throws InputError
+  const std::vector<Wall>& walls() const { return walls_; }
+  void set_wall_velocity(std::size_t wall, const Vec3& v) { walls_[wall].velocity = v; }
+  void move_wall(std::size_t wall, const Vec3& displacement);
+
+  // --- body field and contact defaults (PFC contact model assignment table) --
+  void set_body_field(const BodyField& f) { field_ = f; }
+  const BodyField& body_field() const { return field_; }
+  // New ball-ball contacts copy these; existing contacts keep theirs.
+  void set_ball_ball_defaults(const ContactProperties& p);
+  const ContactProperties& ball_ball_defaults() const { return props_[ball_ball_default_]; }
+  void set_wall_defaults(std::size_t wall, const ContactProperties& p);
+  const ContactProperties& wall_defaults(std::size_t wall) const {
+    return props_[walls_[wall].properties];
+  }
+  const ContactProperties& property_set(std::uint16_t index) const { return props_[index]; }
+  // Changes the properties of existing ball-ball contacts for which
+  // select(i, j) is true; returns how many contacts changed.
+  std::size_t modify_ball_ball_contacts(const std::function<bool(std::size_t, std::size_t)>& select,
+                                        const std::function<void(ContactProperties&)>& change);
+
+  // --- cycling ---------------------------------------------------------------
+  // Advances n steps. Throws InputError if a fixed timestep is above the
+  // critical estimate, InstabilityError if the run goes unstable.
+  void cycle(long steps);
+  // Cycles until the mean unbalanced-force ratio is below `ratio` (checked
+  // every `check_interval` steps) or max_steps; returns the steps taken.
+  long cycle_until_equilibrium(double ratio, long max_steps, int check_interval = 100);
+  long step_count() const { return step_; }
+  double time() const { return time_; }
+  double timestep() const { return dt_; }
+  // Critical timestep estimate 2/omega_max over the current contacts [s].
+  double critical_timestep();
+
+  // --- measurements ----------------------------------------------------------
+  Measurements measure() const;
+  Energy energy() const;
+  double mean_unbalanced_force_ratio() const;
+  RegionMeasurement measure_region(const Box& box) const;
+  std::vector<ContactView> ball_ball_contacts() const;
+  std::size_t bytes_per_particle() const; // all engine storage / particles
+  std::size_t neighbour_entries() const { return bb_.entries(); }
+  long neighbour_rebuilds() const { return rebuilds_; }
+
+  // Forces a rebuild of the neighbour lists (and re-sort) before the next step.
+  void request_rebuild() { dirty_ = true; }
+
+private:
+  void rebuild(std::vector<std::uint32_t> new_to_old);
+  void rebuild_sorted();
+  void ensure_built();
+  void compute_contacts();
+  void integrate();
+  void update_timestep(bool force_estimate);
+  std::uint16_t register_properties(const ContactProperties& p);
+  double skin() const;
+
+  WorldSettings settings_;
+  ParticleStore p_;
+  std::vector<Vec3> position_at_build_;
+  std::vector<Wall> walls_;
+  std::vector<Vec3> wall_motion_since_build_;
+  BodyField field_;
+  std::vector<ContactProperties> props_;
+  std::uint16_t ball_ball_default_ = 0;
+  BallBallContacts bb_;
+  BallWallContacts bw_;
+  std::int64_t next_id_ = 1;
+  long step_ = 0;
+  double time_ = 0;
+  double dt_ = 0;
+  double dt_target_ = 0;
+  long rebuilds_ = 0;
+  bool dirty_ = true;
+  double cutoff_extra_ = 0; // largest attraction range among property sets [m]
+  // Instability report from the contact pass (first offending entry).
+  std::uint32_t unstable_entry_ = UINT32_MAX;
+};
+
+} // namespace centridem

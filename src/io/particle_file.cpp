@@ -1,0 +1,75 @@
+#include "io/particle_file.hpp"
+
+#include "core/errors.hpp"
+#include "core/world.hpp"
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <fmt/format.h>
+#include <fmt/os.h>
+#include <fstream>
+#include <numeric>
+
+namespace centridem {
+
+std::vector<ParticleRecord> read_particle_file(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw InputError("particle file", "\"" + path + "\"", "cannot be opened for reading");
+  std::vector<ParticleRecord> out;
+  std::string line;
+  long lineno = 0;
+  const char* names[4] = {"x", "y", "z", "r"};
+  while (std::getline(in, line)) {
+    ++lineno;
+    if (auto hash = line.find('#'); hash != std::string::npos) line.resize(hash);
+    double v[4];
+    int k = 0;
+    const char* p = line.data();
+    const char* end = p + line.size();
+    while (p < end) {
+      while (p < end && (*p == ' ' || *p == '\t' || *p == ',' || *p == '\r')) ++p;
+      if (p >= end) break;
+      double value = 0;
+      auto [next, ec] = std::from_chars(p, end, value);
+      if (ec != std::errc() || !std::isfinite(value)) {
+        const char* stop = p;
+        while (stop < end && *stop != ' ' && *stop != '\t' && *stop != ',') ++stop;
+        throw InputError(fmt::format("{}:{} column {}", path, lineno, k + 1),
+                         "\"" + std::string(p, stop) + "\"",
+                         "expected a finite number (columns: x y z r, in metres)");
+      }
+      if (k < 4) v[k] = value;
+      ++k;
+      p = next;
+    }
+    if (k == 0) continue;
+    if (k < 4)
+      throw InputError(fmt::format("{}:{}", path, lineno), fmt::format("{} columns", k),
+                       fmt::format("expected 4 columns x y z r (missing {})", names[k]));
+    if (!(v[3] > 0))
+      throw InputError(fmt::format("{}:{} column 4 (r)", path, lineno), fmt::format("{:g}", v[3]),
+                       "radius must be > 0 [m]");
+    out.push_back({{v[0], v[1], v[2]}, v[3]});
+  }
+  if (out.empty()) throw InputError("particle file", "\"" + path + "\"", "holds no particles");
+  return out;
+}
+
+void write_particle_file(const World& world, const std::string& path) {
+  const auto& p = world.particles();
+  std::vector<std::size_t> order(p.size());
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  std::sort(order.begin(), order.end(),
+            [&](std::size_t a, std::size_t b) { return p.id[a] < p.id[b]; });
+  auto out = fmt::output_file(path);
+  out.print("# x y z r vx vy vz (SI: m, m/s), one particle per line, in id order\n");
+  for (std::size_t i : order) {
+    const Vec3& x = p.position[i];
+    const Vec3& v = p.velocity[i];
+    out.print("{:.9e} {:.9e} {:.9e} {:.9e} {:.6e} {:.6e} {:.6e}\n", x.x, x.y, x.z, p.radius[i], v.x,
+              v.y, v.z);
+  }
+}
+
+} // namespace centridem
