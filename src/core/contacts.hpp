@@ -31,7 +31,7 @@ struct BallBallContacts {
   std::size_t entries() const { return other.size(); }
   static constexpr std::size_t bytes_per_entry() {
     return sizeof(std::uint32_t) * 2 + sizeof(std::uint16_t) + sizeof(ContactState) +
-           3 * sizeof(Vec3);
+           2 * sizeof(Vec3);
   }
 };
 
@@ -41,12 +41,10 @@ struct BallWallContacts {
   std::vector<std::uint16_t> properties; // property-set index, or kNoContact
   std::vector<ContactState> state;       // history (end 1 = ball, end 2 = wall)
   std::vector<Vec3> force_on_wall;       // this step's force on the wall [N]
-  std::vector<Vec3> moment_on_ball;      // this step's total moment on the ball [N m]
 
   std::size_t entries() const { return wall.size(); }
   static constexpr std::size_t bytes_per_entry() {
-    return sizeof(std::uint32_t) + 2 * sizeof(std::uint16_t) + sizeof(ContactState) +
-           2 * sizeof(Vec3);
+    return sizeof(std::uint32_t) + 2 * sizeof(std::uint16_t) + sizeof(ContactState) + sizeof(Vec3);
   }
 };
 

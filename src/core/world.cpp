@@ -140,7 +140,6 @@ void World::remove_wall(const std::string& name) {
       out.properties.push_back(bw_.properties[e]);
       out.state.push_back(bw_.state[e]);
       out.force_on_wall.push_back(bw_.force_on_wall[e]);
-      out.moment_on_ball.push_back(bw_.moment_on_ball[e]);
     }
     out.row_offset[i + 1] = static_cast<std::uint32_t>(out.wall.size());
   }
@@ -211,6 +210,7 @@ World::modify_ball_ball_contacts(const std::function<bool(std::size_t, std::size
 double World::skin() const {
   if (settings_.neighbour_skin_m > 0) return settings_.neighbour_skin_m;
   if (p_.size() == 0) return 0.0;
+  if (skin_cached_ > 0) return skin_cached_;
   return 0.5 * *std::min_element(p_.radius.begin(), p_.radius.end());
 }
 
@@ -276,6 +276,7 @@ CellGrid make_grid(const std::vector<Vec3>& x, std::span<const std::uint32_t> wh
 void World::rebuild(std::vector<std::uint32_t> candidates) {
   const std::size_t old_n = p_.size();
   const std::size_t n = candidates.size();
+  skin_cached_ = 0.0; // recomputed below from the kept particles' radii
   const double rmax = n ? *std::max_element(p_.radius.begin(), p_.radius.end()) : 0.0;
   const double cut = skin() + cutoff_extra_;
   const CellGrid grid = make_grid(p_.position, candidates, 2.0 * rmax + cut);
@@ -384,7 +385,6 @@ void World::rebuild(std::vector<std::uint32_t> candidates) {
   bb.properties.assign(entries, kNoContact);
   bb.state.assign(entries, ContactState{});
   bb.force_on_2.resize(entries);
-  bb.moment_on_1.resize(entries);
   bb.moment_on_2.resize(entries);
   BallWallContacts bw;
   bw.row_offset = std::move(wall_count);
@@ -393,7 +393,6 @@ void World::rebuild(std::vector<std::uint32_t> candidates) {
   bw.properties.assign(wall_entries, kNoContact);
   bw.state.assign(wall_entries, ContactState{});
   bw.force_on_wall.resize(wall_entries);
-  bw.moment_on_ball.resize(wall_entries);
 
   // Row starts into the pending lists.
   std::vector<std::uint32_t> pend_start(n + 1, 0), pend_wall_start(n + 1, 0);
@@ -444,6 +443,7 @@ void World::rebuild(std::vector<std::uint32_t> candidates) {
   bb_ = std::move(bb);
   bw_ = std::move(bw);
   position_at_build_ = p_.position;
+  skin_cached_ = n ? 0.5 * *std::min_element(p_.radius.begin(), p_.radius.end()) : 0.0;
   std::fill(wall_motion_since_build_.begin(), wall_motion_since_build_.end(), Vec3{});
   dirty_ = false;
   ++rebuilds_;
@@ -454,6 +454,7 @@ void World::rebuild(std::vector<std::uint32_t> candidates) {
 void World::compute_contacts() {
   const std::size_t n = p_.size();
   const double dt = dt_;
+  auto& P = p_;
   const auto& x = p_.position;
   const auto& v = p_.velocity;
   const auto& w = p_.spin;
@@ -466,11 +467,17 @@ void World::compute_contacts() {
   const double max_overlap = settings_.max_overlap_fraction;
   std::uint32_t unstable = UINT32_MAX;
 
+  // Each row i is handled by one thread: it computes the contacts (i, j > i)
+  // and its ball-wall contacts, sums its own side in registers and leaves the
+  // force and moment on j in the entry; integrate() gathers those in a fixed
+  // order. No two threads write the same memory, and sums do not depend on
+  // the thread count.
 #pragma omp parallel for schedule(static, 256) num_threads(thread_count(settings_))                \
     reduction(min                                                                                  \
               : unstable)
   for (std::size_t i = 0; i < n; ++i) {
-    // Ball-ball contacts of row i (partners j > i).
+    Vec3 fi = P.mass[i] * field_.acceleration(x[i]) + P.applied_force[i];
+    Vec3 mi = P.applied_moment[i];
     for (std::uint32_t e = bb_.row_offset[i]; e < bb_.row_offset[i + 1]; ++e) {
       const std::uint32_t j = bb_.other[e];
       const Vec3 d = x[j] - x[i];
@@ -485,9 +492,11 @@ void World::compute_contacts() {
       const double dist = std::sqrt(dist2);
       const double overlap = r[i] + r[j] - dist;
       const ContactProperties& cp = props[pr];
-      if (!contact_active(cp, overlap) || dist == 0.0) {
+      if (!contact_active(cp, overlap) || dist == 0.0) { // contact ends
         bb_.properties[e] = kNoContact;
         bb_.state[e] = ContactState{};
+        bb_.force_on_2[e] = {};
+        bb_.moment_on_2[e] = {};
         continue;
       }
       bb_.properties[e] = pr;
@@ -501,11 +510,12 @@ void World::compute_contacts() {
                               std::min(r[i], r[j]),
                               r[i] + r[j],
                               r[i] * r[j] / (r[i] + r[j]),
-                              m[i] * m[j] / (m[i] + m[j])};
+                              has_dashpot(cp) ? m[i] * m[j] / (m[i] + m[j]) : 0.0};
       const ContactResult res = contact_law(cp, g, bb_.state[e], dt);
       bb_.force_on_2[e] = res.force;
-      bb_.moment_on_1[e] = cross(arm1, -res.force) - res.moment;
       bb_.moment_on_2[e] = cross(arm2, res.force) + res.moment;
+      fi -= res.force;
+      mi -= cross(arm1, res.force) + res.moment;
       if (overlap > max_overlap * std::min(r[i], r[j])) unstable = std::min(unstable, e);
     }
     // Ball-wall contacts of ball i (end 1 = ball, end 2 = wall).
@@ -523,6 +533,7 @@ void World::compute_contacts() {
       if (!contact_active(cp, overlap)) {
         bw_.properties[e] = kNoContact;
         bw_.state[e] = ContactState{};
+        bw_.force_on_wall[e] = {};
         continue;
       }
       bw_.properties[e] = pr;
@@ -532,10 +543,13 @@ void World::compute_contacts() {
           nrm, overlap, wl.velocity - (v[i] + cross(w[i], arm)), -w[i], r[i], r[i], r[i], m[i]};
       const ContactResult res = contact_law(cp, g, bw_.state[e], dt);
       bw_.force_on_wall[e] = res.force;
-      bw_.moment_on_ball[e] = cross(arm, -res.force) - res.moment;
+      fi -= res.force;
+      mi -= cross(arm, res.force) + res.moment;
       if (overlap > max_overlap * r[i])
         unstable = std::min(unstable, UINT32_MAX - 1 - static_cast<std::uint32_t>(i));
     }
+    P.force[i] = fi;
+    P.moment[i] = mi;
   }
   unstable_entry_ = unstable;
 }
@@ -553,23 +567,14 @@ void World::integrate() {
               : max_move2) reduction(min                                                           \
                                      : bad)
   for (std::size_t i = 0; i < n; ++i) {
-    Vec3 f = P.mass[i] * field_.acceleration(P.position[i]) + P.applied_force[i];
-    Vec3 mo = P.applied_moment[i];
-    for (std::uint32_t e = bb_.row_offset[i]; e < bb_.row_offset[i + 1]; ++e) {
-      if (bb_.properties[e] == kNoContact) continue;
-      f -= bb_.force_on_2[e];
-      mo += bb_.moment_on_1[e];
-    }
+    // Own side was summed by compute_contacts; add the forces from the
+    // contacts in which i is the second end (zero for non-touching entries).
+    Vec3 f = P.force[i];
+    Vec3 mo = P.moment[i];
     for (std::uint32_t k = bb_.incoming_offset[i]; k < bb_.incoming_offset[i + 1]; ++k) {
       const std::uint32_t e = bb_.incoming[k];
-      if (bb_.properties[e] == kNoContact) continue;
       f += bb_.force_on_2[e];
       mo += bb_.moment_on_2[e];
-    }
-    for (std::uint32_t e = bw_.row_offset[i]; e < bw_.row_offset[i + 1]; ++e) {
-      if (bw_.properties[e] == kNoContact) continue;
-      f -= bw_.force_on_wall[e];
-      mo += bw_.moment_on_ball[e];
     }
     P.force[i] = f;
     P.moment[i] = mo;
@@ -925,10 +930,10 @@ std::size_t World::bytes_per_particle() const {
   bytes +=
       cap(p_.radius) + cap(p_.mass) + cap(p_.inertia) + cap(p_.id) + cap(p_.group) + cap(p_.flags);
   bytes += cap(bb_.row_offset) + cap(bb_.other) + cap(bb_.properties) + cap(bb_.state) +
-           cap(bb_.force_on_2) + cap(bb_.moment_on_1) + cap(bb_.moment_on_2) +
-           cap(bb_.incoming_offset) + cap(bb_.incoming);
+           cap(bb_.force_on_2) + cap(bb_.moment_on_2) + cap(bb_.incoming_offset) +
+           cap(bb_.incoming);
   bytes += cap(bw_.row_offset) + cap(bw_.wall) + cap(bw_.properties) + cap(bw_.state) +
-           cap(bw_.force_on_wall) + cap(bw_.moment_on_ball);
+           cap(bw_.force_on_wall);
   return bytes / n;
 }
 

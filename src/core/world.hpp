@@ -181,6 +181,7 @@ private:
   long rebuilds_ = 0;
   bool dirty_ = true;
   double cutoff_extra_ = 0; // largest attraction range among property sets [m]
+  double skin_cached_ = 0;  // automatic skin at the last rebuild [m]
   // Instability report from the contact pass (first offending entry).
   std::uint32_t unstable_entry_ = UINT32_MAX;
 };

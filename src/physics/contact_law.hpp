@@ -41,7 +41,7 @@ struct ContactGeometry {
   double contact_radius_m;  // r of the contact area A = pi r^2 (ball-ball: min(R1,R2); wall: R)
   double contact_length_m;  // L in kn = A E*/L (ball-ball: R1 + R2; ball-wall: R)
   double rolling_radius_m;  // R-bar = R1 R2/(R1+R2) (ball-wall: R)
-  double effective_mass_kg; // mc = m1 m2/(m1+m2) (ball-wall: m)
+  double effective_mass_kg; // mc = m1 m2/(m1+m2) (ball-wall: m); only read by dashpots
 };
 
 // History stored per contact, carried across steps and neighbour rebuilds.
@@ -79,6 +79,12 @@ inline ContactStiffness contact_stiffness(const ContactProperties& p, const Cont
   return {kn, ks, kr};
 }
 
+// Whether the properties use a dashpot (the engine then supplies the
+// effective mass, which costs a division).
+inline bool has_dashpot(const ContactProperties& p) {
+  return p.dashpot_normal_ratio > 0.0 || p.dashpot_shear_ratio > 0.0;
+}
+
 // Whether a pair at this geometry is (still) a contact under properties p:
 // overlapping, or an adhesive contact whose gap is below the attraction range.
 inline bool contact_active(const ContactProperties& p, double overlap_m) {
@@ -101,14 +107,20 @@ inline double attraction_force(const ContactProperties& p, double overlap_m) {
 inline Vec3 rotate_into_plane(const Vec3& v, const Vec3& n) {
   const double m0 = norm2(v);
   if (m0 == 0.0) return v;
-  Vec3 t = v - dot(v, n) * n;
-  const double m1 = norm2(t);
-  return m1 > 0.0 ? t * std::sqrt(m0 / m1) : Vec3{};
+  const double vn = dot(v, n);
+  const Vec3 t = v - vn * n;
+  const double m1 = m0 - vn * vn; // |t|^2
+  if (!(m1 > 0.0)) return Vec3{};
+  // Rescale to the old magnitude. The pair turns by a tiny angle per step,
+  // so x = vn^2/m1 is tiny and sqrt(m0/m1) = sqrt(1 + x) ~ 1 + x/2 - x^2/8
+  // to round-off; the exact form is kept for larger turns.
+  const double x = vn * vn / m1;
+  return t * (x < 1e-5 ? 1.0 + x * (0.5 - 0.125 * x) : std::sqrt(m0 / m1));
 }
 
 // One step of the contact law. dt is the timestep [s].
-inline ContactResult contact_law(const ContactProperties& p, const ContactGeometry& g,
-                                 ContactState& state, double dt) {
+[[gnu::always_inline]] inline ContactResult
+contact_law(const ContactProperties& p, const ContactGeometry& g, ContactState& state, double dt) {
   const Vec3& n = g.normal;
   const ContactStiffness k = contact_stiffness(p, g);
 
