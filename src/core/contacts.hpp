@@ -21,9 +21,11 @@ struct BallBallContacts {
   std::vector<std::uint32_t> other;      // j of each entry (j > i)
   std::vector<std::uint16_t> properties; // property-set index, or kNoContact
   std::vector<ContactState> state;       // history
-  std::vector<Vec3> force_on_2;          // this step's force on j [N]
-  std::vector<Vec3> moment_on_1;         // this step's total moment on i [N m]
-  std::vector<Vec3> moment_on_2;         // this step's total moment on j [N m]
+  std::vector<std::uint8_t> image;       // periodic image code of j (empty if not periodic)
+  // This step's force and total moment on j (zero when not touching). The
+  // row owner i sums its own side directly; j gathers these in integrate().
+  std::vector<Vec3> force_on_2;  // [N]
+  std::vector<Vec3> moment_on_2; // [N m]
   // Transpose: for particle j, the entries in which it is the second end.
   std::vector<std::uint32_t> incoming_offset; // size n+1
   std::vector<std::uint32_t> incoming;        // entry indices

@@ -9,6 +9,7 @@
 #include <limits>
 #include <numeric>
 #include <omp.h>
+#include <unordered_map>
 
 namespace centridem {
 
@@ -45,7 +46,11 @@ World::World(WorldSettings settings) : settings_(settings) {
 }
 
 namespace {
-int thread_count(const WorldSettings& s) {
+// Threads for a loop over n items: small loops run serially (a parallel
+// region costs more than it saves there, and oversubscribed machines make
+// waiting threads spin). Results do not depend on the thread count.
+int thread_count(const WorldSettings& s, std::size_t n = SIZE_MAX) {
+  if (n < 2000) return 1;
   return s.threads > 0 ? s.threads : omp_get_max_threads();
 }
 } // namespace
@@ -239,36 +244,59 @@ struct PendingWall {
 
 struct CellGrid {
   Vec3 origin;
-  double h = 1;
-  std::int64_t nx = 1, ny = 1, nz = 1;
-  std::int64_t cell_of(const Vec3& x) const {
-    auto c = [&](double v, double o, std::int64_t n) {
-      return std::clamp<std::int64_t>(static_cast<std::int64_t>((v - o) / h), 0, n - 1);
-    };
-    return (c(x.z, origin.z, nz) * ny + c(x.y, origin.y, ny)) * nx + c(x.x, origin.x, nx);
+  std::array<double, 3> h{1, 1, 1};
+  std::array<std::int64_t, 3> n{1, 1, 1};
+  std::array<bool, 3> periodic{false, false, false};
+  std::int64_t axis_cell(double v, int a) const {
+    return std::clamp<std::int64_t>(static_cast<std::int64_t>((v - origin[a]) / h[a]), 0, n[a] - 1);
   }
+  std::int64_t cell_of(const Vec3& x) const {
+    return (axis_cell(x.z, 2) * n[1] + axis_cell(x.y, 1)) * n[0] + axis_cell(x.x, 0);
+  }
+  std::size_t count() const { return static_cast<std::size_t>(n[0] * n[1] * n[2]); }
 };
 
-CellGrid make_grid(const std::vector<Vec3>& x, std::span<const std::uint32_t> which, double h) {
+CellGrid make_grid(const std::vector<Vec3>& x, std::span<const std::uint32_t> which, double h,
+                   const PeriodicBox& pb) {
   CellGrid g;
+  g.periodic = pb.axis;
   if (which.empty()) return g;
   Vec3 lo = x[which[0]], hi = lo;
   for (std::uint32_t k : which) {
     for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], x[k][a]), hi[a] = std::max(hi[a], x[k][a]);
   }
+  for (int a = 0; a < 3; ++a) {
+    if (!pb.axis[a]) continue;
+    const double L = pb.hi[a] - pb.lo[a];
+    const auto cells = static_cast<std::int64_t>(L / h);
+    if (cells < 3)
+      throw InputError(fmt::format("periodic box length along {}", "xyz"[a]),
+                       fmt::format("{:.4g} m", L),
+                       fmt::format("must be at least 3 neighbour cells = {:.4g} m (3 x (largest "
+                                   "diameter + skin + attraction range))",
+                                   3 * h));
+    lo[a] = pb.lo[a];
+    g.n[a] = cells;
+    g.h[a] = L / static_cast<double>(cells);
+  }
   // Keep the grid at most ~4 cells per particle (sparse, spread-out models).
   const double max_cells = std::max<double>(64.0, 4.0 * static_cast<double>(which.size()));
+  double hh = h;
   for (;;) {
-    g.nx = static_cast<std::int64_t>((hi.x - lo.x) / h) + 1;
-    g.ny = static_cast<std::int64_t>((hi.y - lo.y) / h) + 1;
-    g.nz = static_cast<std::int64_t>((hi.z - lo.z) / h) + 1;
-    if (static_cast<double>(g.nx) * static_cast<double>(g.ny) * static_cast<double>(g.nz) <=
-        max_cells)
-      break;
-    h *= 1.25;
+    double total = 1.0;
+    for (int a = 0; a < 3; ++a) {
+      if (pb.axis[a]) {
+        total *= static_cast<double>(g.n[a]);
+        continue;
+      }
+      g.h[a] = hh;
+      g.n[a] = static_cast<std::int64_t>((hi[a] - lo[a]) / hh) + 1;
+      total *= static_cast<double>(g.n[a]);
+    }
+    if (total <= max_cells || hh > 1e3 * h) break;
+    hh *= 1.25;
   }
   g.origin = lo;
-  g.h = h;
   return g;
 }
 } // namespace
@@ -279,10 +307,23 @@ void World::rebuild(std::vector<std::uint32_t> candidates) {
   skin_cached_ = 0.0; // recomputed below from the kept particles' radii
   const double rmax = n ? *std::max_element(p_.radius.begin(), p_.radius.end()) : 0.0;
   const double cut = skin() + cutoff_extra_;
-  const CellGrid grid = make_grid(p_.position, candidates, 2.0 * rmax + cut);
+  // Wrap periodic positions into the box (only here, so that image codes stay
+  // valid between rebuilds).
+  if (periodic_.any()) {
+    for (std::uint32_t k : candidates) {
+      Vec3& xk = p_.position[k];
+      for (int a = 0; a < 3; ++a) {
+        if (!periodic_.axis[a]) continue;
+        const double L = periodic_.hi[a] - periodic_.lo[a];
+        xk[a] -= L * std::floor((xk[a] - periodic_.lo[a]) / L);
+        if (xk[a] >= periodic_.hi[a]) xk[a] = periodic_.lo[a]; // round-off at hi
+      }
+    }
+  }
+  const CellGrid grid = make_grid(p_.position, candidates, 2.0 * rmax + cut, periodic_);
 
   // Order the kept particles by cell (counting sort, stable: deterministic).
-  const std::size_t ncells = static_cast<std::size_t>(grid.nx * grid.ny * grid.nz);
+  const std::size_t ncells = grid.count();
   std::vector<std::uint32_t> cell_start(ncells + 1, 0);
   std::vector<std::uint32_t> cell_of_candidate(n);
   for (std::size_t k = 0; k < n; ++k) {
@@ -322,6 +363,33 @@ void World::rebuild(std::vector<std::uint32_t> candidates) {
       pending_wall.push_back({old_to_new[i], bw_.wall[e], bw_.properties[e], bw_.state[e]});
     }
   }
+  if (!restored_.empty()) {
+    std::unordered_map<std::int64_t, std::uint32_t> index_of_id;
+    index_of_id.reserve(n);
+    for (std::size_t k = 0; k < n; ++k)
+      index_of_id[p_.id[new_to_old[k]]] = static_cast<std::uint32_t>(k);
+    for (const ContactRecord& rec : restored_) {
+      const auto a = index_of_id.find(rec.id1);
+      if (a == index_of_id.end()) continue;
+      const std::uint16_t pr = register_properties(rec.properties);
+      if (rec.wall >= 0) {
+        if (static_cast<std::size_t>(rec.wall) < walls_.size())
+          pending_wall.push_back({a->second, static_cast<std::uint16_t>(rec.wall), pr, rec.state});
+        continue;
+      }
+      const auto b = index_of_id.find(rec.id2);
+      if (b == index_of_id.end()) continue;
+      std::uint32_t i = a->second, j = b->second;
+      ContactState st = rec.state;
+      if (i > j) {
+        std::swap(i, j);
+        st.shear_force = -st.shear_force;
+        st.rolling_moment = -st.rolling_moment;
+      }
+      pending.push_back({i, j, pr, st});
+    }
+    restored_.clear();
+  }
   std::sort(pending.begin(), pending.end(), [](const PendingPair& a, const PendingPair& b) {
     return a.i != b.i ? a.i < b.i : a.j < b.j;
   });
@@ -337,25 +405,42 @@ void World::rebuild(std::vector<std::uint32_t> candidates) {
   // increasing index gives each row's j in increasing order.
   const auto& x = p_.position;
   const auto& r = p_.radius;
-  const int nthreads = thread_count(settings_);
+  const int nthreads = thread_count(settings_, n);
+  // visit(j, image code) for each j > i within reach; with periodic axes a
+  // neighbour cell past the box wraps around and j is taken at its image.
   auto for_each_candidate = [&](std::size_t i, auto&& visit) {
-    const std::int64_t c = grid.cell_of(x[i]);
-    const std::int64_t cx = c % grid.nx, cy = (c / grid.nx) % grid.ny, cz = c / (grid.nx * grid.ny);
-    for (std::int64_t dz = -1; dz <= 1; ++dz) {
-      const std::int64_t z = cz + dz;
-      if (z < 0 || z >= grid.nz) continue;
-      for (std::int64_t dy = -1; dy <= 1; ++dy) {
-        const std::int64_t y = cy + dy;
-        if (y < 0 || y >= grid.ny) continue;
-        for (std::int64_t dx = -1; dx <= 1; ++dx) {
-          const std::int64_t xx = cx + dx;
-          if (xx < 0 || xx >= grid.nx) continue;
-          const std::size_t cell = static_cast<std::size_t>((z * grid.ny + y) * grid.nx + xx);
+    std::array<std::int64_t, 3> c{grid.axis_cell(x[i].x, 0), grid.axis_cell(x[i].y, 1),
+                                  grid.axis_cell(x[i].z, 2)};
+    std::array<std::int64_t, 3> cc{};
+    std::array<int, 3> sh{};
+    for (int dz = -1; dz <= 1; ++dz) {
+      for (int dy = -1; dy <= 1; ++dy) {
+        for (int dx = -1; dx <= 1; ++dx) {
+          const int dd[3] = {dx, dy, dz};
+          bool skip = false;
+          for (int a = 0; a < 3; ++a) {
+            cc[a] = c[a] + dd[a];
+            sh[a] = 0;
+            if (cc[a] < 0 || cc[a] >= grid.n[a]) {
+              if (!grid.periodic[a]) {
+                skip = true;
+                break;
+              }
+              sh[a] = cc[a] < 0 ? -1 : 1;
+              cc[a] -= sh[a] * grid.n[a];
+            }
+          }
+          if (skip) continue;
+          const std::uint8_t code =
+              static_cast<std::uint8_t>((sh[0] + 1) + 3 * (sh[1] + 1) + 9 * (sh[2] + 1));
+          const Vec3 shift = image_shift_[code];
+          const std::size_t cell =
+              static_cast<std::size_t>((cc[2] * grid.n[1] + cc[1]) * grid.n[0] + cc[0]);
           for (std::uint32_t j =
                    std::max<std::uint32_t>(cell_start[cell], static_cast<std::uint32_t>(i + 1));
                j < cell_start[cell + 1]; ++j) {
             const double reach = r[i] + r[j] + cut;
-            if (norm2(x[j] - x[i]) < reach * reach) visit(j);
+            if (norm2(x[j] + shift - x[i]) < reach * reach) visit(j, code);
           }
         }
       }
@@ -369,7 +454,7 @@ void World::rebuild(std::vector<std::uint32_t> candidates) {
 #pragma omp parallel for schedule(static, 512) num_threads(nthreads)
   for (std::size_t i = 0; i < n; ++i) {
     std::uint32_t c = 0;
-    for_each_candidate(i, [&](std::uint32_t) { ++c; });
+    for_each_candidate(i, [&](std::uint32_t, std::uint8_t) { ++c; });
     count[i + 1] = c;
     std::uint32_t cw = 0;
     for (const Wall& w : walls_) cw += near_wall(i, w) ? 1u : 0u;
@@ -383,6 +468,8 @@ void World::rebuild(std::vector<std::uint32_t> candidates) {
   const std::size_t entries = bb.row_offset[n];
   bb.other.resize(entries);
   bb.properties.assign(entries, kNoContact);
+  const bool periodic = periodic_.any();
+  if (periodic) bb.image.resize(entries);
   bb.state.assign(entries, ContactState{});
   bb.force_on_2.resize(entries);
   bb.moment_on_2.resize(entries);
@@ -405,12 +492,24 @@ void World::rebuild(std::vector<std::uint32_t> candidates) {
   for (std::size_t i = 0; i < n; ++i) {
     std::uint32_t e = bb.row_offset[i];
     std::uint32_t q = pend_start[i];
-    for_each_candidate(i, [&](std::uint32_t j) {
+    for_each_candidate(i, [&](std::uint32_t j, std::uint8_t code) {
       bb.other[e] = j;
-      while (q < pend_start[i + 1] && pending[q].j < j) ++q; // separated beyond the list
-      if (q < pend_start[i + 1] && pending[q].j == j) {
-        bb.properties[e] = pending[q].properties;
-        bb.state[e] = pending[q].state;
+      if (periodic) bb.image[e] = code;
+      if (periodic) { // wrapped cells break the increasing-j order: search the row
+        const auto first = pending.begin() + pend_start[i],
+                   last = pending.begin() + pend_start[i + 1];
+        const auto it = std::lower_bound(
+            first, last, j, [](const PendingPair& pp, std::uint32_t jj) { return pp.j < jj; });
+        if (it != last && it->j == j) {
+          bb.properties[e] = it->properties;
+          bb.state[e] = it->state;
+        }
+      } else {
+        while (q < pend_start[i + 1] && pending[q].j < j) ++q; // separated beyond the list
+        if (q < pend_start[i + 1] && pending[q].j == j) {
+          bb.properties[e] = pending[q].properties;
+          bb.state[e] = pending[q].state;
+        }
       }
       ++e;
     });
@@ -452,6 +551,13 @@ void World::rebuild(std::vector<std::uint32_t> candidates) {
 // ------------------------------------------------------------------- cycle --
 
 void World::compute_contacts() {
+  if (periodic_.any())
+    compute_contacts_impl<true>();
+  else
+    compute_contacts_impl<false>();
+}
+
+template <bool Periodic> void World::compute_contacts_impl() {
   const std::size_t n = p_.size();
   const double dt = dt_;
   auto& P = p_;
@@ -472,7 +578,7 @@ void World::compute_contacts() {
   // force and moment on j in the entry; integrate() gathers those in a fixed
   // order. No two threads write the same memory, and sums do not depend on
   // the thread count.
-#pragma omp parallel for schedule(static, 256) num_threads(thread_count(settings_))                \
+#pragma omp parallel for schedule(static, 256) num_threads(thread_count(settings_, n))             \
     reduction(min                                                                                  \
               : unstable)
   for (std::size_t i = 0; i < n; ++i) {
@@ -480,7 +586,8 @@ void World::compute_contacts() {
     Vec3 mi = P.applied_moment[i];
     for (std::uint32_t e = bb_.row_offset[i]; e < bb_.row_offset[i + 1]; ++e) {
       const std::uint32_t j = bb_.other[e];
-      const Vec3 d = x[j] - x[i];
+      Vec3 d = x[j] - x[i];
+      if constexpr (Periodic) d += image_shift_[bb_.image[e]];
       const double dist2 = norm2(d);
       std::uint16_t pr = bb_.properties[e];
       if (pr == kNoContact) {
@@ -562,7 +669,7 @@ void World::integrate() {
   double max_move2 = 0.0;
   std::uint32_t bad = UINT32_MAX;
 
-#pragma omp parallel for schedule(static, 256) num_threads(thread_count(settings_))                \
+#pragma omp parallel for schedule(static, 256) num_threads(thread_count(settings_, n))             \
     reduction(max                                                                                  \
               : max_move2) reduction(min                                                           \
                                      : bad)
@@ -640,14 +747,14 @@ double World::critical_timestep() {
     return std::max(ln, lt);
   };
   double max_omega2 = 0.0;
-#pragma omp parallel for schedule(static, 512) num_threads(thread_count(settings_))                \
+#pragma omp parallel for schedule(static, 512) num_threads(thread_count(settings_, n))             \
     reduction(max                                                                                  \
               : max_omega2)
   for (std::size_t i = 0; i < n; ++i) {
     double w2 = 0.0;
     bool any = false;
-    auto pair = [&](std::size_t j, std::uint16_t pr) {
-      const double ov = r[i] + r[j] - norm(x[j] - x[i]);
+    auto pair = [&](std::size_t j, std::uint16_t pr, std::uint32_t e) {
+      const double ov = r[i] + r[j] - norm(i < j ? pair_vector(e, i, j) : pair_vector(e, j, i));
       const ContactGeometry g{
           {}, ov, {}, {}, std::min(r[i], r[j]), r[i] + r[j], r[i] * r[j] / (r[i] + r[j]), 0.0};
       w2 +=
@@ -655,13 +762,12 @@ double World::critical_timestep() {
       any = true;
     };
     for (std::uint32_t e = bb_.row_offset[i]; e < bb_.row_offset[i + 1]; ++e)
-      if (bb_.properties[e] != kNoContact) pair(bb_.other[e], bb_.properties[e]);
+      if (bb_.properties[e] != kNoContact) pair(bb_.other[e], bb_.properties[e], e);
     for (std::uint32_t k = bb_.incoming_offset[i]; k < bb_.incoming_offset[i + 1]; ++k) {
       const std::uint32_t e = bb_.incoming[k];
       if (bb_.properties[e] == kNoContact) continue;
       // find the first end of entry e: the row that holds it
-      const auto it = std::upper_bound(bb_.row_offset.begin(), bb_.row_offset.end(), e);
-      pair(static_cast<std::size_t>(it - bb_.row_offset.begin() - 1), bb_.properties[e]);
+      pair(first_end(e), bb_.properties[e], e);
     }
     for (std::uint32_t e = bw_.row_offset[i]; e < bw_.row_offset[i + 1]; ++e) {
       if (bw_.properties[e] == kNoContact) continue;
@@ -715,9 +821,7 @@ void World::cycle(long steps) {
         const std::size_t i = UINT32_MAX - 1 - unstable_entry_;
         who = fmt::format("ball id {} (radius {:.4g} m) and a wall", p_.id[i], p_.radius[i]);
       } else {
-        const auto it =
-            std::upper_bound(bb_.row_offset.begin(), bb_.row_offset.end(), unstable_entry_);
-        const std::size_t i = static_cast<std::size_t>(it - bb_.row_offset.begin() - 1);
+        const std::size_t i = first_end(unstable_entry_);
         const std::size_t j = bb_.other[unstable_entry_];
         who = fmt::format("balls id {} and id {} (radii {:.4g} m, {:.4g} m)", p_.id[i], p_.id[j],
                           p_.radius[i], p_.radius[j]);
@@ -746,6 +850,69 @@ long World::cycle_until_equilibrium(double ratio, long max_steps, int check_inte
   return done;
 }
 
+std::size_t World::first_end(std::uint32_t e) const {
+  const auto it = std::upper_bound(bb_.row_offset.begin(), bb_.row_offset.end(), e);
+  return static_cast<std::size_t>(it - bb_.row_offset.begin() - 1);
+}
+
+// ------------------------------------------------------- periodic, records --
+
+void World::set_periodic(const PeriodicBox& box) {
+  for (int a = 0; a < 3; ++a)
+    if (box.axis[a] && !(box.hi[a] > box.lo[a]))
+      throw InputError(fmt::format("periodic.{}", "xyz"[a]),
+                       fmt::format("[{:g}, {:g}]", box.lo[a], box.hi[a]), "hi must exceed lo [m]");
+  periodic_ = box;
+  const Vec3 L = box.length();
+  for (int sz = -1; sz <= 1; ++sz)
+    for (int sy = -1; sy <= 1; ++sy)
+      for (int sx = -1; sx <= 1; ++sx)
+        image_shift_[static_cast<std::size_t>((sx + 1) + 3 * (sy + 1) + 9 * (sz + 1))] = {
+            box.axis[0] ? sx * L.x : 0.0, box.axis[1] ? sy * L.y : 0.0,
+            box.axis[2] ? sz * L.z : 0.0};
+  dirty_ = true;
+}
+
+std::vector<ContactRecord> World::contact_records() const {
+  std::vector<ContactRecord> out;
+  const std::size_t n = p_.size();
+  if (bb_.row_offset.size() != n + 1) return out;
+  for (std::size_t i = 0; i < n; ++i) {
+    for (std::uint32_t e = bb_.row_offset[i]; e < bb_.row_offset[i + 1]; ++e) {
+      if (bb_.properties[e] == kNoContact) continue;
+      ContactRecord rec;
+      rec.id1 = p_.id[i];
+      rec.id2 = p_.id[bb_.other[e]];
+      if (!bb_.image.empty()) {
+        const int c = bb_.image[e];
+        rec.image = {static_cast<std::int8_t>(c % 3 - 1), static_cast<std::int8_t>((c / 3) % 3 - 1),
+                     static_cast<std::int8_t>(c / 9 - 1)};
+      }
+      rec.properties = props_[bb_.properties[e]];
+      rec.state = bb_.state[e];
+      out.push_back(rec);
+    }
+    for (std::uint32_t e = bw_.row_offset[i]; e < bw_.row_offset[i + 1]; ++e) {
+      if (bw_.properties[e] == kNoContact) continue;
+      ContactRecord rec;
+      rec.id1 = p_.id[i];
+      rec.wall = bw_.wall[e];
+      rec.properties = props_[bw_.properties[e]];
+      rec.state = bw_.state[e];
+      out.push_back(rec);
+    }
+  }
+  return out;
+}
+
+void World::restore_contacts(const std::vector<ContactRecord>& records) {
+  // Register the property sets now, so the neighbour cutoff covers their
+  // attraction range before the rebuild that matches the records.
+  for (const ContactRecord& rec : records) register_properties(rec.properties);
+  restored_.insert(restored_.end(), records.begin(), records.end());
+  dirty_ = true;
+}
+
 // ------------------------------------------------------------ measurements --
 
 double World::mean_unbalanced_force_ratio() const {
@@ -754,7 +921,7 @@ double World::mean_unbalanced_force_ratio() const {
   // PFC `mech.ratio.avg`: average unbalanced force magnitude over the average
   // magnitude of the forces applied to the balls (body, applied, contacts).
   double unbalanced = 0.0, applied = 0.0;
-#pragma omp parallel for schedule(static, 512) num_threads(thread_count(settings_)) \
+#pragma omp parallel for schedule(static, 512) num_threads(thread_count(settings_, n)) \
     reduction(+ : unbalanced, applied)
   for (std::size_t i = 0; i < n; ++i) {
     if (p_.flags[i] & fix_translation) continue;
@@ -787,7 +954,7 @@ Measurements World::measure() const {
       if (bb_.properties[e] == kNoContact) continue;
       ++nbb;
       const std::uint32_t j = bb_.other[e];
-      const double ov = p_.radius[i] + p_.radius[j] - norm(p_.position[j] - p_.position[i]);
+      const double ov = p_.radius[i] + p_.radius[j] - norm(pair_vector(e, i, j));
       max_ratio = std::max(max_ratio, ov / std::min(p_.radius[i], p_.radius[j]));
     }
     for (std::uint32_t e = bw_.row_offset[i]; e < bw_.row_offset[i + 1]; ++e) {
@@ -829,7 +996,7 @@ Energy World::energy() const {
     for (std::uint32_t e = bb_.row_offset[i]; e < bb_.row_offset[i + 1]; ++e) {
       if (bb_.properties[e] == kNoContact) continue;
       const std::uint32_t j = bb_.other[e];
-      const double ov = r[i] + r[j] - norm(p_.position[j] - p_.position[i]);
+      const double ov = r[i] + r[j] - norm(pair_vector(e, i, j));
       strain(props_[bb_.properties[e]],
              {{}, ov, {}, {}, std::min(r[i], r[j]), r[i] + r[j], r[i] * r[j] / (r[i] + r[j]), 0.0},
              bb_.state[e]);
@@ -866,7 +1033,7 @@ RegionMeasurement World::measure_region(const Box& box) const {
     for (std::uint32_t e = bb_.row_offset[i]; e < bb_.row_offset[i + 1]; ++e) {
       if (bb_.properties[e] == kNoContact) continue;
       const std::uint32_t j = bb_.other[e];
-      const Vec3 d = x[j] - x[i];
+      const Vec3 d = pair_vector(e, i, j);
       const double dist = norm(d);
       const double ov = r[i] + r[j] - dist;
       add(d * ((r[i] - 0.5 * ov) / dist), -bb_.force_on_2[e]);
@@ -874,9 +1041,8 @@ RegionMeasurement World::measure_region(const Box& box) const {
     for (std::uint32_t k = bb_.incoming_offset[i]; k < bb_.incoming_offset[i + 1]; ++k) {
       const std::uint32_t e = bb_.incoming[k];
       if (bb_.properties[e] == kNoContact) continue;
-      const auto it = std::upper_bound(bb_.row_offset.begin(), bb_.row_offset.end(), e);
-      const std::size_t a = static_cast<std::size_t>(it - bb_.row_offset.begin() - 1);
-      const Vec3 d = x[a] - x[i];
+      const std::size_t a = first_end(e);
+      const Vec3 d = -pair_vector(e, a, i);
       const double dist = norm(d);
       const double ov = r[i] + r[a] - dist;
       add(d * ((r[i] - 0.5 * ov) / dist), bb_.force_on_2[e]);
@@ -904,7 +1070,7 @@ std::vector<ContactView> World::ball_ball_contacts() const {
     for (std::uint32_t e = bb_.row_offset[i]; e < bb_.row_offset[i + 1]; ++e) {
       if (bb_.properties[e] == kNoContact) continue;
       const std::uint32_t j = bb_.other[e];
-      const Vec3 d = p_.position[j] - p_.position[i];
+      const Vec3 d = pair_vector(e, i, j);
       const double dist = norm(d);
       const double ov = p_.radius[i] + p_.radius[j] - dist;
       const Vec3 nrm = d / dist;

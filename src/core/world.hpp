@@ -40,6 +40,28 @@ struct Box {
   double volume() const { return (hi.x - lo.x) * (hi.y - lo.y) * (hi.z - lo.z); }
 };
 
+// Periodic boundaries: along each flagged axis, space repeats with period
+// hi - lo; a particle leaving at hi re-enters at lo (positions are wrapped at
+// neighbour rebuilds). Each period must be at least 3 neighbour cells
+// (3 x (largest diameter + skin)).
+struct PeriodicBox {
+  std::array<bool, 3> axis{false, false, false};
+  Vec3 lo, hi; // [m]
+  bool any() const { return axis[0] || axis[1] || axis[2]; }
+  Vec3 length() const { return hi - lo; }
+};
+
+// An active contact, by particle ids, with everything needed to recreate it
+// exactly (bricks, checkpoints).
+struct ContactRecord {
+  std::int64_t id1 = 0;               // first end (a ball)
+  std::int64_t id2 = 0;               // second end: a ball id, or unused for a wall
+  std::int32_t wall = -1;             // wall index for a ball-wall contact, else -1
+  std::array<std::int8_t, 3> image{}; // periodic image of end 2 relative to end 1
+  ContactProperties properties;
+  ContactState state;
+};
+
 struct Energy {
   double kinetic_J = 0;        // 1/2 m v^2 summed
   double rotational_J = 0;     // 1/2 I w^2 summed
@@ -111,6 +133,16 @@ public:
   void set_wall_velocity(std::size_t wall, const Vec3& v) { walls_[wall].velocity = v; }
   void move_wall(std::size_t wall, const Vec3& displacement);
 
+  // --- periodic boundaries -------------------------------------------------
+  void set_periodic(const PeriodicBox& box);
+  const PeriodicBox& periodic() const { return periodic_; }
+
+  // --- contact state for bricks and checkpoints -----------------------------
+  std::vector<ContactRecord> contact_records() const;
+  // Recreates contacts by particle id (matched at the next neighbour rebuild;
+  // records whose particles are missing or too far apart are dropped).
+  void restore_contacts(const std::vector<ContactRecord>& records);
+
   // --- body field and contact defaults (PFC contact model assignment table) --
   void set_body_field(const BodyField& f) { field_ = f; }
   const BodyField& body_field() const { return field_; }
@@ -153,11 +185,33 @@ public:
   // Forces a rebuild of the neighbour lists (and re-sort) before the next step.
   void request_rebuild() { dirty_ = true; }
 
+  // --- clock (checkpoints) -----------------------------------------------------
+  struct Clock {
+    long step = 0;
+    double time_s = 0;
+    double timestep_s = 0;        // timestep of the last step
+    double timestep_target_s = 0; // automatic-timestep target
+    std::int64_t next_id = 1;     // id the next added particle gets
+  };
+  Clock clock() const { return {step_, time_, dt_, dt_target_, next_id_}; }
+  void set_clock(const Clock& c) {
+    step_ = c.step, time_ = c.time_s, dt_ = c.timestep_s, dt_target_ = c.timestep_target_s;
+    next_id_ = c.next_id;
+  }
+
 private:
   void rebuild(std::vector<std::uint32_t> new_to_old);
   void rebuild_sorted();
   void ensure_built();
   void compute_contacts();
+  template <bool Periodic> void compute_contacts_impl();
+  // Vector from particle i to the (image of) particle j of ball-ball entry e.
+  Vec3 pair_vector(std::uint32_t e, std::size_t i, std::size_t j) const {
+    Vec3 d = p_.position[j] - p_.position[i];
+    if (!bb_.image.empty()) d += image_shift_[bb_.image[e]];
+    return d;
+  }
+  std::size_t first_end(std::uint32_t e) const; // row that holds entry e
   void integrate();
   void update_timestep(bool force_estimate);
   std::uint16_t register_properties(const ContactProperties& p);
@@ -181,7 +235,10 @@ private:
   long rebuilds_ = 0;
   bool dirty_ = true;
   double cutoff_extra_ = 0; // largest attraction range among property sets [m]
-  double skin_cached_ = 0;  // automatic skin at the last rebuild [m]
+  PeriodicBox periodic_;
+  std::array<Vec3, 27> image_shift_{};  // shift of image code c = (sx+1) + 3(sy+1) + 9(sz+1)
+  std::vector<ContactRecord> restored_; // waiting for the next rebuild
+  double skin_cached_ = 0;              // automatic skin at the last rebuild [m]
   // Instability report from the contact pass (first offending entry).
   std::uint32_t unstable_entry_ = UINT32_MAX;
 };
