@@ -1,0 +1,70 @@
+# centridem: set up, build, test and run from one place.
+# On a fresh Debian 12 machine, as root:   make demo    then    make test
+# Every target that needs the compiler first runs `setup` (scripts/setup.sh, once).
+
+SHELL := /bin/bash
+MAKEFLAGS += --no-print-directory
+.DEFAULT_GOAL := build
+
+BUILD_DIR   := build
+BUILD_TYPE  := Release
+JOBS        ?= $(shell nproc 2>/dev/null || echo 2)
+CENTRIDEM   := ./$(BUILD_DIR)/centridem
+# Re-run scripts/setup.sh only when it changes (or after `make clean`).
+SETUP_STAMP := $(BUILD_DIR)/.setup-done
+
+# The demo. When `centridem demo` (the benched-slope demo) lands, this is the one line to change:
+#   DEMO_CMD = $(CENTRIDEM) demo --out $(DEMO_OUT)
+DEMO_OUT := runs/demo
+DEMO_CMD  = $(CENTRIDEM) run examples/demo_settle.toml --out $(DEMO_OUT)
+
+FORMAT_DIRS := src tests bench
+
+.PHONY: setup build test test-long demo bench format clean help
+
+help:
+	@echo "make setup      install the missing Debian 12 packages (scripts/setup.sh; once)"
+	@echo "make build      configure and build $(BUILD_TYPE) in $(BUILD_DIR)/ (default target)"
+	@echo "make test       build, then the unit tests (ctest -L unit)"
+	@echo "make test-long  build, then the opt-in long tests (ctest -L long; hours)"
+	@echo "make demo       build, then run the demo into $(DEMO_OUT)/ and say where the results are"
+	@echo "make bench      build, then the throughput benchmark (centridem bench)"
+	@echo "make format     clang-format -i every C++ file in $(FORMAT_DIRS)"
+	@echo "make clean      remove $(BUILD_DIR)/ (run folders under runs/ are kept)"
+
+setup: $(SETUP_STAMP)
+
+$(SETUP_STAMP): scripts/setup.sh
+	bash scripts/setup.sh
+	@mkdir -p $(@D)
+	@touch $@
+
+build: setup
+	cmake -S . -B $(BUILD_DIR) -DCMAKE_BUILD_TYPE=$(BUILD_TYPE)
+	cmake --build $(BUILD_DIR) -j$(JOBS)
+
+test: build
+	cd $(BUILD_DIR) && ctest -L unit --output-on-failure -j2 --timeout 900
+
+test-long: build
+	cd $(BUILD_DIR) && ctest -L long --output-on-failure
+
+demo: build
+	$(DEMO_CMD)
+	@echo
+	@echo "Demo results: $(DEMO_OUT)/"
+	@find $(DEMO_OUT) -name summary.json 2>/dev/null | sort | sed 's/^/  summary:  /' | grep . \
+	  || echo "  summary:  (no summary.json found)"
+	@find $(DEMO_OUT) -name '*.pvd' 2>/dev/null | sort | sed 's/^/  ParaView: /' | grep . \
+	  || echo "  ParaView: (no .pvd files found)"
+	@echo "  Open a .pvd in ParaView (File > Open) to play the frames."
+
+bench: build
+	$(CENTRIDEM) bench
+
+format: setup
+	find $(FORMAT_DIRS) \( -name '*.cpp' -o -name '*.hpp' -o -name '*.h' \) -print0 \
+	  | xargs -0 -r clang-format -i
+
+clean:
+	rm -rf $(BUILD_DIR)
