@@ -29,8 +29,10 @@ void validate(const WorldSettings& s) {
     bad("simulation.timestep_update_interval", s.timestep_update_interval, "must be >= 1");
   if (!(s.neighbour_skin_m >= 0) || !std::isfinite(s.neighbour_skin_m))
     bad("simulation.neighbour_skin_m", s.neighbour_skin_m, "must be >= 0 (0 = automatic)");
-  if (!(s.max_overlap_fraction > 0 && s.max_overlap_fraction <= 1))
-    bad("simulation.max_overlap_fraction", s.max_overlap_fraction, "must be in (0, 1]");
+  if (!(s.max_overlap_fraction > 0))
+    bad("simulation.max_overlap_fraction", s.max_overlap_fraction,
+        "must be > 0 (values above 1 tolerate deep overlaps, e.g. while relaxing a distributed "
+        "specimen)");
   if (s.threads < 0) bad("simulation.threads", s.threads, "must be >= 0 (0 = all cores)");
 }
 

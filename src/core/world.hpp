@@ -25,8 +25,9 @@ struct WorldSettings {
   double timestep_growth_limit = 0.05; // automatic dt grows at most this fraction per step [-]
   int timestep_update_interval = 100;  // steps between critical-timestep estimates
   double neighbour_skin_m = 0.0;       // Verlet skin; 0 = half the smallest radius [m]
-  double max_overlap_fraction = 0.5;   // instability guard: overlap / smaller radius [-]
-  int threads = 0;                     // OpenMP threads; 0 = the OpenMP default
+  double max_overlap_fraction =
+      0.5; // instability guard: overlap / smaller radius [-] (> 0; > 1 tolerates deep overlaps)
+  int threads = 0; // OpenMP threads; 0 = the OpenMP default
 };
 
 void validate(const WorldSettings& s);
