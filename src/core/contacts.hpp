@@ -40,13 +40,15 @@ struct BallBallContacts {
 struct BallWallContacts {
   std::vector<std::uint32_t> row_offset; // size n+1
   std::vector<std::uint16_t> wall;       // wall index of each entry
+  std::vector<std::uint32_t> ball;       // ball index of each entry (for per-wall sums)
   std::vector<std::uint16_t> properties; // property-set index, or kNoContact
   std::vector<ContactState> state;       // history (end 1 = ball, end 2 = wall)
   std::vector<Vec3> force_on_wall;       // this step's force on the wall [N]
 
   std::size_t entries() const { return wall.size(); }
   static constexpr std::size_t bytes_per_entry() {
-    return sizeof(std::uint32_t) + 2 * sizeof(std::uint16_t) + sizeof(ContactState) + sizeof(Vec3);
+    return 2 * sizeof(std::uint32_t) + 2 * sizeof(std::uint16_t) + sizeof(ContactState) +
+           sizeof(Vec3);
   }
 };
 

@@ -14,6 +14,20 @@ namespace centridem {
 
 enum class WallShape : std::uint8_t { plane, rectangle };
 
+// Servo control of a wall along one direction (PFC's servo mechanism; PFC 7
+// manual, "Servo-controlled walls"): each step the wall's speed along
+// `direction` is set to alpha (F_target - F_measured) / (sum kn dt), so that
+// in one step it would close the force error by the fraction alpha given the
+// current contact stiffness, capped at max_speed. Velocity components across
+// `direction` are left as prescribed.
+struct WallServo {
+  bool active = false;
+  Vec3 direction{0, 0, 1};        // unit: the way the wall moves to compress the specimen
+  double target_force_N = 0.0;    // compressive force wanted on the wall [N]
+  double gain_factor = 0.5;       // alpha, in (0, 1] [-]
+  double max_speed_m_per_s = 1.0; // speed cap [m/s]
+};
+
 struct Wall {
   std::string name;
   WallShape shape = WallShape::plane;
@@ -24,7 +38,9 @@ struct Wall {
   Vec3 velocity;                     // prescribed translational velocity [m/s]
   Vec3 force;                        // measured: total force the balls exert on the wall [N]
   std::uint16_t properties = 0;      // index of its current default contact properties
-  std::uint32_t contact_count = 0;   // measured: active ball-wall contacts
+  std::uint32_t contact_count = 0;
+  double normal_stiffness_N_per_m = 0.0; // measured: sum of kn over its contacts (servo walls)
+  WallServo servo;                       // measured: active ball-wall contacts
 
   static Wall plane(std::string name, const Vec3& point, const Vec3& normal);
   // Rectangle from its centre, normal and one edge direction (u); v = n x u.

@@ -142,6 +142,7 @@ void World::remove_wall(const std::string& name) {
   for (std::size_t i = 0; i + 1 < bw_.row_offset.size(); ++i) {
     for (std::uint32_t e = bw_.row_offset[i]; e < bw_.row_offset[i + 1]; ++e) {
       if (bw_.wall[e] == k) continue;
+      out.ball.push_back(bw_.ball[e]);
       out.wall.push_back(
           static_cast<std::uint16_t>(bw_.wall[e] > k ? bw_.wall[e] - 1 : bw_.wall[e]));
       out.properties.push_back(bw_.properties[e]);
@@ -153,6 +154,29 @@ void World::remove_wall(const std::string& name) {
   bw_ = std::move(out);
   walls_.erase(walls_.begin() + static_cast<std::ptrdiff_t>(k));
   wall_motion_since_build_.erase(wall_motion_since_build_.begin() + static_cast<std::ptrdiff_t>(k));
+}
+
+void World::set_wall_servo(std::size_t wall, const WallServo& servo) {
+  WallServo s = servo;
+  const std::string key = "walls." + walls_.at(wall).name + ".servo";
+  if (s.active) {
+    const double len = norm(s.direction);
+    if (!(len > 0) || !std::isfinite(len))
+      throw InputError(key + ".direction",
+                       fmt::format("[{}, {}, {}]", s.direction.x, s.direction.y, s.direction.z),
+                       "must be a non-zero vector");
+    s.direction = s.direction / len;
+    if (!(s.gain_factor > 0 && s.gain_factor <= 1))
+      throw InputError(key + ".gain_factor", fmt::format("{:g}", s.gain_factor),
+                       "must be in (0, 1]");
+    if (!(s.max_speed_m_per_s > 0) || !std::isfinite(s.max_speed_m_per_s))
+      throw InputError(key + ".max_speed_m_per_s", fmt::format("{:g}", s.max_speed_m_per_s),
+                       "must be > 0 [m/s]");
+    if (!std::isfinite(s.target_force_N))
+      throw InputError(key + ".target_force_N", fmt::format("{:g}", s.target_force_N),
+                       "must be finite [N]");
+  }
+  walls_[wall].servo = s;
 }
 
 void World::move_wall(std::size_t wall, const Vec3& displacement) {
@@ -479,6 +503,7 @@ void World::rebuild(std::vector<std::uint32_t> candidates) {
   bw.row_offset = std::move(wall_count);
   const std::size_t wall_entries = bw.row_offset[n];
   bw.wall.resize(wall_entries);
+  bw.ball.resize(wall_entries);
   bw.properties.assign(wall_entries, kNoContact);
   bw.state.assign(wall_entries, ContactState{});
   bw.force_on_wall.resize(wall_entries);
@@ -520,6 +545,7 @@ void World::rebuild(std::vector<std::uint32_t> candidates) {
     for (std::size_t k = 0; k < walls_.size(); ++k) {
       if (!near_wall(i, walls_[k])) continue;
       bw.wall[ew] = static_cast<std::uint16_t>(k);
+      bw.ball[ew] = static_cast<std::uint32_t>(i);
       while (qw < pend_wall_start[i + 1] && pending_wall[qw].wall < k) ++qw;
       if (qw < pend_wall_start[i + 1] && pending_wall[qw].wall == k) {
         bw.properties[ew] = pending_wall[qw].properties;
@@ -716,10 +742,35 @@ void World::integrate() {
     walls_[k].contact_count = 0;
     max_wall_move = std::max(max_wall_move, norm(wall_motion_since_build_[k]));
   }
+  bool any_servo = false;
+  for (Wall& wl : walls_) {
+    wl.normal_stiffness_N_per_m = 0.0;
+    any_servo = any_servo || wl.servo.active;
+  }
   for (std::size_t e = 0; e < bw_.entries(); ++e) {
     if (bw_.properties[e] == kNoContact) continue;
-    walls_[bw_.wall[e]].force += bw_.force_on_wall[e];
-    ++walls_[bw_.wall[e]].contact_count;
+    Wall& wl = walls_[bw_.wall[e]];
+    wl.force += bw_.force_on_wall[e];
+    ++wl.contact_count;
+    if (wl.servo.active) {
+      const double R = p_.radius[bw_.ball[e]];
+      const ContactGeometry g{{}, 0.0, {}, {}, R, R, R, 0.0};
+      wl.normal_stiffness_N_per_m += contact_stiffness(props_[bw_.properties[e]], g).kn;
+    }
+  }
+  if (any_servo) {
+    for (Wall& wl : walls_) {
+      if (!wl.servo.active) continue;
+      const WallServo& sv = wl.servo;
+      const double measured = -dot(wl.force, sv.direction); // balls push against `direction`
+      const double error = sv.target_force_N - measured;
+      double speed = wl.normal_stiffness_N_per_m > 0
+                         ? sv.gain_factor * error / (wl.normal_stiffness_N_per_m * dt)
+                         : (error > 0 ? sv.max_speed_m_per_s : -sv.max_speed_m_per_s);
+      speed = std::clamp(speed, -sv.max_speed_m_per_s, sv.max_speed_m_per_s);
+      wl.velocity =
+          wl.velocity - dot(wl.velocity, sv.direction) * sv.direction + speed * sv.direction;
+    }
   }
 
   const double max_move = std::sqrt(max_move2);

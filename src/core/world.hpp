@@ -133,6 +133,8 @@ public:
   const std::vector<Wall>& walls() const { return walls_; }
   void set_wall_velocity(std::size_t wall, const Vec3& v) { walls_[wall].velocity = v; }
   void move_wall(std::size_t wall, const Vec3& displacement);
+  // Servo control (see WallServo); pass servo.active = false to stop it.
+  void set_wall_servo(std::size_t wall, const WallServo& servo);
 
   // --- periodic boundaries -------------------------------------------------
   void set_periodic(const PeriodicBox& box);

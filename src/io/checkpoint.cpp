@@ -110,6 +110,8 @@ void write_checkpoint(World& world, const std::string& path, const std::string& 
     w.pod(wl.shape), w.pod(wl.point), w.pod(wl.normal), w.pod(wl.axis_u), w.pod(wl.axis_v);
     w.pod(wl.half_u), w.pod(wl.half_v), w.pod(wl.velocity), w.pod(wl.force);
     w.pod(wl.contact_count);
+    w.pod(wl.normal_stiffness_N_per_m);
+    w.pod(wl.servo);
     w.props(world.wall_defaults(k));
   }
   w.vec(world.contact_records());
@@ -204,6 +206,8 @@ LoadedCheckpoint read_checkpoint(World& world, const std::string& path) {
     wl.axis_u = r.pod<Vec3>(), wl.axis_v = r.pod<Vec3>(), wl.half_u = r.pod<double>();
     wl.half_v = r.pod<double>(), wl.velocity = r.pod<Vec3>(), wl.force = r.pod<Vec3>();
     wl.contact_count = r.pod<std::uint32_t>();
+    wl.normal_stiffness_N_per_m = r.pod<double>();
+    wl.servo = r.pod<WallServo>();
     const auto props = r.pod<ContactProperties>();
     world.add_wall(std::move(wl), props);
   }
