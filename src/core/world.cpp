@@ -610,7 +610,7 @@ template <bool Periodic> void World::compute_contacts_impl() {
     reduction(min                                                                                  \
               : unstable)
   for (std::size_t i = 0; i < n; ++i) {
-    Vec3 fi = P.mass[i] * field_.acceleration(x[i]) + P.applied_force[i];
+    Vec3 fi = P.mass[i] * field_.acceleration(x[i], v[i]) + P.applied_force[i];
     Vec3 mi = P.applied_moment[i];
     for (std::uint32_t e = bb_.row_offset[i]; e < bb_.row_offset[i + 1]; ++e) {
       const std::uint32_t j = bb_.other[e];
@@ -978,7 +978,8 @@ double World::mean_unbalanced_force_ratio() const {
     reduction(+ : unbalanced, applied)
   for (std::size_t i = 0; i < n; ++i) {
     if (p_.flags[i] & fix_translation) continue;
-    double a = norm(p_.mass[i] * field_.acceleration(p_.position[i])) + norm(p_.applied_force[i]);
+    double a = norm(p_.mass[i] * field_.acceleration(p_.position[i], p_.velocity[i])) +
+               norm(p_.applied_force[i]);
     for (std::uint32_t e = bb_.row_offset[i]; e < bb_.row_offset[i + 1]; ++e)
       if (bb_.properties[e] != kNoContact) a += norm(bb_.force_on_2[e]);
     for (std::uint32_t k = bb_.incoming_offset[i]; k < bb_.incoming_offset[i + 1]; ++k)
