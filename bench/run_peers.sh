@@ -27,7 +27,7 @@ repeat=1
 workdir=""
 keep=0
 
-usage() { sed -n '2,16p' "${BASH_SOURCE[0]}" | sed 's/^# \{0,1\}//'; }
+usage() { sed -n '2,14p' "${BASH_SOURCE[0]}" | sed 's/^# \{0,1\}//'; }
 
 while [ $# -gt 0 ]; do
   case "$1" in
@@ -139,6 +139,9 @@ for code in $codes; do
         echo "run_peers.sh: mpirun not found, skipping procs=$np" >&2; continue
       fi
       echo "run_peers.sh: [$tag] ${cmd[*]}" >&2
+      if [ -r /proc/loadavg ]; then
+        echo "run_peers.sh: [$tag] load average before: $(cut -d' ' -f1-3 /proc/loadavg)" >&2
+      fi
       if ! (cd "$workdir" && timeout "$timeout_s" "${cmd[@]}" >"$workdir/$tag.screen" 2>&1); then
         echo "run_peers.sh: [$tag] failed; last lines of $workdir/$tag.screen:" >&2
         tail -n 15 "$workdir/$tag.screen" >&2 || true
@@ -156,7 +159,7 @@ for code in $codes; do
       [ "$cpp" = "NA" ] || cpp="$(awk -v c="$cpp" 'BEGIN{printf "%.3f", c}')"
       awk -v code="$(code_label "$code")" -v model="$(code_model "$code")" -v np="$lprocs" \
           -v st="$lsteps" -v na="$latoms" -v w="$wall" -v c="$cpp" 'BEGIN{
-            printf "code=%s model=%s procs=%d steps=%d particles=%d wall_s=%.3f particle_steps_per_s=%.3e contacts_per_particle=%s\n",
+            printf "code=%s model=%s procs=%d steps=%d particles=%d wall_s=%.4g particle_steps_per_s=%.3e contacts_per_particle=%s\n",
                    code, model, np, st, na, w, na*st/w, c }'
       nok=$((nok + 1))
     done

@@ -1,7 +1,9 @@
 // centridem: command line. Exit codes: 0 success, 2 bad input, 3 the run went
 // unstable, 1 any other failure.
 #include "core/errors.hpp"
+#include "io/scenario.hpp"
 #include "procedures/bench.hpp"
+#include "procedures/staged_run.hpp"
 
 #include <CLI/CLI.hpp>
 #include <cstdio>
@@ -21,6 +23,20 @@ int run_bench_command(const BenchOptions& o) {
                r.neighbours_per_particle, r.bytes_per_particle, r.rebuilds, r.particle_steps_per_s);
     std::fflush(stdout);
   }
+  return 0;
+}
+
+struct RunCommand {
+  std::string scenario;
+  std::string out;
+  int threads = -1; // -1: as the scenario says
+};
+
+int run_run_command(const RunCommand& c) {
+  RunOptions o;
+  o.output_dir = c.out;
+  if (c.threads >= 0) o.threads = c.threads;
+  run_scenario(load_scenario(c.scenario), o);
   return 0;
 }
 
@@ -44,6 +60,18 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
 
+  RunCommand run;
+  auto* cmd_run = app.add_subcommand(
+      "run", "run a staged scenario: particles, walls, gravity, stages of cycling "
+             "(docs/scenario.md)");
+  cmd_run->add_option("scenario", run.scenario, "scenario file (TOML)")->required();
+  cmd_run->add_option("--out", run.out,
+                      "run folder (default: simulation.output_dir, else runs/<scenario stem>)");
+  cmd_run
+      ->add_option("--threads", run.threads,
+                   "OpenMP threads, overrides simulation.threads (0 = the OpenMP default)")
+      ->check(CLI::NonNegativeNumber);
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -53,6 +81,7 @@ int main(int argc, char** argv) {
 
   try {
     if (*cmd_bench) return run_bench_command(bench);
+    if (*cmd_run) return run_run_command(run);
   } catch (const InputError& e) {
     fmt::print(stderr, "centridem: error: {}\n", e.what());
     return 2;

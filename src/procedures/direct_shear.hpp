@@ -1,0 +1,98 @@
+// The numerical direct shear test (Tao et al. section 3.1; DESIGN.md
+// "Procedures"): a box of 12 rectangular walls — 5 for the lower half
+// (bottom + 4 sides), 5 for the upper half (top + 4 sides), and 2 plates at the
+// shear plane that keep particles from escaping where the halves no longer
+// overlap. Consolidation by a servo on the bottom wall with the upper box
+// fixed; then the servo holds the normal stress while the upper box moves in
+// -x at the shear rate. Coordinates: the box spans [0, L] x [0, W] x [0, H],
+// shear plane at z = H/2.
+#pragma once
+
+#include "core/world.hpp"
+#include "physics/contact_properties.hpp"
+
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace centridem {
+
+struct ShearBox {
+  double length_m = 0.0132; // L, along the shear direction x [m]
+  double width_m = 0.0132;  // W, along y [m]
+  double height_m = 0.0044; // H, specimen height at the start [m]
+  // Length of the two shear-plane plates; at least the largest shear
+  // displacement [m]. 0 = the largest shear displacement + 10 %.
+  double plate_length_m = 0.0;
+};
+
+enum class StrainDefinition { height, length }; // shear displacement / H or / L
+
+struct DirectShearSpec {
+  ShearBox box;
+  double normal_stress_Pa = 100e3;
+  double shear_rate_m_per_s = 0.2e-3 / 60.0 * 1000.0; // the test's 0.2 mm/min x 1000 [m/s]
+  double max_shear_displacement_m = 0.0013;           // stop at this displacement [m]
+  StrainDefinition strain = StrainDefinition::height;
+  ContactProperties ball_wall; // friction 0: smooth box (paper)
+  std::optional<ContactProperties>
+      ball_ball_during_shear;            // defaults for contacts made while shearing
+  double servo_gain_factor = 0.5;        // alpha of the bottom-wall servo [-]
+  double servo_max_speed_m_per_s = 0.05; // [m/s]
+  double consolidation_ratio = 1e-3;     // mean unbalanced-force ratio to end consolidation [-]
+  double consolidation_stress_tolerance = 0.01; // and |sigma - target| / target below this [-]
+  long consolidation_max_steps = 400'000;
+  long record_interval_steps = 1000; // steps between curve points
+};
+
+struct ShearPoint {
+  long step = 0;
+  double time_s = 0;                  // since shearing began
+  double shear_displacement_m = 0;    // upper box travel
+  double shear_strain = 0;            // per `strain`
+  double shear_stress_Pa = 0;         // x-force on the upper box / (L W)
+  double normal_stress_Pa = 0;        // bottom-wall force / (L W)
+  double vertical_displacement_m = 0; // specimen height change since shearing began (+ dilation)
+  double porosity = 0;                // centre-based, inside the box
+};
+
+struct DirectShearResult {
+  double target_normal_stress_Pa = 0;
+  long consolidation_steps = 0;
+  double consolidated_height_m = 0;
+  std::vector<ShearPoint> curve;
+  double peak_shear_stress_Pa = 0;
+  double peak_strain = 0;
+  double residual_shear_stress_Pa = 0;      // mean over the last 20 % of the displacement
+  double worst_normal_stress_deviation = 0; // max |sigma - target| / target while shearing
+  std::size_t particles_lost = 0;           // outside the box at the end
+  double wall_seconds = 0;
+  double particle_steps_per_s = 0;
+};
+
+using ShearProgress = std::function<void(const ShearPoint&, const DirectShearResult&)>;
+
+// Adds the 12 walls around the box; returns nothing the caller needs: walls
+// are named bottom, lower_x0, lower_x1, lower_y0, lower_y1, top, upper_x0,
+// upper_x1, upper_y0, upper_y1, plate_lower, plate_upper.
+void add_shear_box(World& world, const ShearBox& box, const ContactProperties& ball_wall,
+                   double max_shear_displacement_m);
+
+// Runs consolidation and shearing on `world`, which holds the specimen inside
+// the box (walls added here). Throws InputError for bad spec values.
+DirectShearResult run_direct_shear(World& world, const DirectShearSpec& spec,
+                                   const ShearProgress& progress = {});
+
+void validate(const DirectShearSpec& spec);
+
+// Mohr-Coulomb fit tau = c + sigma tan(phi) by least squares over points.
+struct MohrCoulombFit {
+  double cohesion_Pa = 0;
+  double friction_angle_deg = 0;
+  double r_squared = 0;
+};
+MohrCoulombFit fit_mohr_coulomb(const std::vector<double>& normal_stress_Pa,
+                                const std::vector<double>& shear_stress_Pa);
+
+} // namespace centridem

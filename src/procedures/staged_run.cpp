@@ -1,0 +1,572 @@
+#include "procedures/staged_run.hpp"
+
+#include "core/errors.hpp"
+#include "io/output.hpp"
+#include "io/particle_file.hpp"
+#include "io/vtk.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <fmt/format.h>
+#include <limits>
+#include <nlohmann/json.hpp>
+#include <omp.h>
+
+namespace centridem {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+World build_world(const Scenario& sc) {
+  World world(sc.simulation.world);
+  world.particles_mut().reserve(sc.particles.records.size());
+  for (const ParticleRecord& r : sc.particles.records)
+    world.add_particle(r.position, r.radius, sc.particles.density_kg_m3, sc.particles.group);
+  world.set_ball_ball_defaults(sc.ball_ball);
+  for (const WallSpec& w : sc.walls) world.add_wall(w.make(), w.contact);
+  world.set_body_field(sc.gravity.field());
+  return world;
+}
+
+namespace {
+
+double seconds_since(Clock::time_point t) {
+  return std::chrono::duration<double>(Clock::now() - t).count();
+}
+
+std::string duration(double s) {
+  if (!std::isfinite(s)) return "?";
+  if (s < 60) return fmt::format("{:.0f} s", std::max(s, 0.0));
+  if (s < 3600)
+    return fmt::format("{} min {:02d} s", static_cast<int>(s / 60), static_cast<int>(s) % 60);
+  return fmt::format("{} h {:02d} min", static_cast<int>(s / 3600), static_cast<int>(s / 60) % 60);
+}
+
+std::string describe(const ContactProperties& c) {
+  std::string s(to_string(c.model));
+  if (c.stiffness_method == StiffnessMethod::deformability)
+    s += fmt::format(" E*={:g} Pa kratio={:g}", c.effective_modulus_Pa, c.stiffness_ratio);
+  else
+    s += fmt::format(" kn={:g} N/m ks={:g} N/m", c.normal_stiffness_N_per_m,
+                     c.shear_stiffness_N_per_m);
+  s += fmt::format(" fric={:g}", c.friction);
+  if (c.model != ContactModel::linear) s += fmt::format(" rr_fric={:g}", c.rolling_friction);
+  if (c.model == ContactModel::arrlinear)
+    s += fmt::format(" F0={:g} N D0={:g} m", c.attraction_force_N, c.attraction_range_m);
+  if (c.dashpot_normal_ratio > 0 || c.dashpot_shear_ratio > 0)
+    s += fmt::format(" dp_nratio={:g} dp_sratio={:g} dp_mode={}", c.dashpot_normal_ratio,
+                     c.dashpot_shear_ratio, c.dashpot_mode);
+  return s;
+}
+
+std::string describe(const GravitySpec& g) {
+  const Vec3 a = g.field().gravity_m_s2;
+  std::string s = fmt::format("[{:.6g}, {:.6g}, {:.6g}] m/s^2", a.x, a.y, a.z);
+  if (g.form == GravitySpec::Form::scaled)
+    s += fmt::format(" ({:g} g / {:g})", g.g_level, g.size_reduction_factor);
+  return s;
+}
+
+std::string describe_end(const StageSpec& s) {
+  switch (s.end) {
+  case StageEnd::steps:
+    return fmt::format("{} steps", s.steps);
+  case StageEnd::time:
+    return fmt::format("{:g} s", s.time_s);
+  case StageEnd::equilibrium:
+    return fmt::format("until ratio < {:g} (max {} steps)", s.equilibrium_ratio,
+                       s.equilibrium_max_steps);
+  }
+  return "?";
+}
+
+std::string path_in(const std::string& dir, const std::string& name) {
+  return (fs::path(dir) / name).string();
+}
+
+// measurements.csv: one row per measurement, across stages.
+class MeasurementTable {
+public:
+  MeasurementTable(const std::string& path, std::vector<std::string> walls)
+      : walls_(std::move(walls)) {
+    f_ = std::fopen(path.c_str(), "w");
+    if (!f_) throw std::runtime_error("cannot write " + path);
+    fmt::print(f_, "step,time_s,stage,ratio,kinetic_energy_J,coordination_number,contacts,"
+                   "ball_wall_contacts,particles,timestep_s,max_overlap_ratio");
+    for (const std::string& w : walls_)
+      fmt::print(f_, ",{0}_force_x_N,{0}_force_y_N,{0}_force_z_N", w);
+    fmt::print(f_, "\n");
+  }
+  ~MeasurementTable() {
+    if (f_) std::fclose(f_);
+  }
+  MeasurementTable(const MeasurementTable&) = delete;
+  MeasurementTable& operator=(const MeasurementTable&) = delete;
+
+  void row(const World& world, const Measurements& m, const std::string& stage) {
+    if (m.step == last_step_) return;
+    last_step_ = m.step;
+    fmt::print(f_, "{},{:.9e},{},{:.6e},{:.6e},{:.6f},{},{},{},{:.6e},{:.6e}", m.step, m.time_s,
+               stage, m.mean_unbalanced_force_ratio, m.kinetic_energy_J, m.coordination_number,
+               m.ball_ball_contacts, m.ball_wall_contacts, m.particles, m.timestep_s,
+               m.max_overlap_ratio);
+    for (const std::string& name : walls_) {
+      const auto& ws = world.walls();
+      auto it = std::find_if(ws.begin(), ws.end(), [&](const Wall& w) { return w.name == name; });
+      if (it == ws.end())
+        fmt::print(f_, ",,,"); // removed
+      else
+        fmt::print(f_, ",{:.6e},{:.6e},{:.6e}", it->force.x, it->force.y, it->force.z);
+    }
+    fmt::print(f_, "\n");
+    std::fflush(f_);
+  }
+
+private:
+  std::vector<std::string> walls_;
+  std::FILE* f_ = nullptr;
+  long last_step_ = -1;
+};
+
+// ParaView frames and their two series files. One frame per step: a frame
+// written at the same step as the last one (a stage that starts by removing
+// particles) replaces it.
+class FrameWriter {
+public:
+  explicit FrameWriter(std::string dir)
+      : dir_(std::move(dir)), particles_(path_in(dir_, "particles.pvd")),
+        contacts_(path_in(dir_, "contacts.pvd")) {}
+
+  void write(const World& world) {
+    if (!made_) make_directories(path_in(dir_, "frames")), made_ = true;
+    const bool same = world.step_count() == last_step_;
+    const std::size_t k = same ? next_ - 1 : next_;
+    const std::string pf = fmt::format("frames/particles_{:06d}.vtu", k);
+    const std::string cf = fmt::format("frames/contacts_{:06d}.vtp", k);
+    write_particles_vtu(world, path_in(dir_, pf));
+    write_contacts_vtp(world, path_in(dir_, cf));
+    if (!same) {
+      particles_.add(world.time(), pf);
+      contacts_.add(world.time(), cf);
+      ++next_;
+      last_step_ = world.step_count();
+    }
+  }
+  std::size_t count() const { return next_; }
+
+private:
+  std::string dir_;
+  PvdSeries particles_, contacts_;
+  bool made_ = false;
+  std::size_t next_ = 0;
+  long last_step_ = -1;
+};
+
+std::vector<WallReading> read_walls(const World& world) {
+  std::vector<WallReading> out;
+  for (const Wall& w : world.walls()) out.push_back({w.name, w.force, w.contact_count});
+  return out;
+}
+
+nlohmann::ordered_json to_json(const Vec3& v) {
+  return {v.x, v.y, v.z};
+}
+
+nlohmann::ordered_json to_json(const StageReport& r, const StageSpec& spec, std::size_t index) {
+  nlohmann::ordered_json j;
+  j["index"] = index;
+  j["name"] = r.name;
+  j["end"] = std::string(to_string(r.end));
+  switch (spec.end) {
+  case StageEnd::steps:
+    j["target"] = {{"steps", spec.steps}};
+    break;
+  case StageEnd::time:
+    j["target"] = {{"time_s", spec.time_s}};
+    break;
+  case StageEnd::equilibrium:
+    j["target"] = {{"ratio", spec.equilibrium_ratio},
+                   {"max_steps", spec.equilibrium_max_steps},
+                   {"check_interval", spec.equilibrium_check_interval}};
+    j["reached_equilibrium"] = r.reached_equilibrium;
+    break;
+  }
+  j["first_step"] = r.first_step;
+  j["steps"] = r.steps;
+  j["start_time_s"] = r.start_time_s;
+  j["time_s"] = r.time_s;
+  j["end_time_s"] = r.start_time_s + r.time_s;
+  j["particles_removed"] = r.particles_removed;
+  j["contacts_modified"] = r.contacts_modified;
+  const Measurements& m = r.end_state;
+  nlohmann::ordered_json mj;
+  mj["particles"] = m.particles;
+  mj["coordination_number"] = m.coordination_number;
+  mj["mean_unbalanced_force_ratio"] = m.mean_unbalanced_force_ratio;
+  mj["kinetic_energy_J"] = m.kinetic_energy_J;
+  mj["ball_ball_contacts"] = m.ball_ball_contacts;
+  mj["ball_wall_contacts"] = m.ball_wall_contacts;
+  mj["max_overlap_ratio"] = m.max_overlap_ratio;
+  mj["timestep_s"] = m.timestep_s;
+  nlohmann::ordered_json wj = nlohmann::ordered_json::object();
+  for (const WallReading& w : r.walls)
+    wj[w.name] = {{"force_N", to_json(w.force_N)}, {"contacts", w.contacts}};
+  mj["walls"] = wj;
+  j["measurements"] = mj;
+  j["wall_time_s"] = r.wall_time_s;
+  j["particle_steps_per_s"] = r.particle_steps_per_s;
+  j["particles_file"] = r.particles_file;
+  j["frames"] = r.frames;
+  return j;
+}
+
+class Summary {
+public:
+  Summary(std::string path, const Scenario& sc, int threads) : path_(std::move(path)), sc_(sc) {
+    head_["scenario"] = sc.source_path;
+    head_["description"] = sc.description;
+    head_["threads"] = threads;
+    head_["particles_at_start"] = sc.particles.records.size();
+  }
+  void write(const RunReport& r, const std::string& status, const std::string& error) const {
+    nlohmann::ordered_json j = head_;
+    j["output_dir"] = r.output_dir;
+    j["status"] = status;
+    if (!error.empty()) j["error"] = error;
+    j["wall_time_s"] = r.wall_time_s;
+    nlohmann::ordered_json stages = nlohmann::ordered_json::array();
+    for (std::size_t k = 0; k < r.stages.size(); ++k)
+      stages.push_back(to_json(r.stages[k], sc_.stages[k], k));
+    j["stages"] = stages;
+    replace_text_file(path_, j.dump(2) + "\n");
+  }
+
+private:
+  std::string path_;
+  const Scenario& sc_;
+  nlohmann::ordered_json head_;
+};
+
+void echo(RunLog& log, const Scenario& sc, const World& world, int threads) {
+  log.info(fmt::format("centridem run {}{}", sc.source_path,
+                       sc.description.empty() ? "" : " - " + sc.description));
+  const auto& r = world.particles().radius;
+  const auto [rmin, rmax] = std::minmax_element(r.begin(), r.end());
+  log.info(fmt::format("  particles  {} from {} (density {:g} kg/m^3, radii {:.4g}-{:.4g} m)",
+                       world.particles().size(), sc.particles.file, sc.particles.density_kg_m3,
+                       r.empty() ? 0.0 : *rmin, r.empty() ? 0.0 : *rmax));
+  log.info("  ball-ball  " + describe(sc.ball_ball));
+  for (const WallSpec& w : sc.walls)
+    log.info(fmt::format("  wall       {} ({}): {}", w.name,
+                         w.shape == WallShape::plane ? "plane" : "rectangle", describe(w.contact)));
+  log.info("  gravity    " + describe(sc.gravity));
+  const WorldSettings& s = sc.simulation.world;
+  log.info(fmt::format("  timestep   {}; local damping {:g}; threads {}",
+                       s.timestep_s > 0
+                           ? fmt::format("{:g} s (fixed)", s.timestep_s)
+                           : fmt::format("auto (safety factor {:g})", s.timestep_safety_factor),
+                       s.local_damping, threads));
+  for (std::size_t k = 0; k < sc.stages.size(); ++k) {
+    const StageSpec& st = sc.stages[k];
+    std::string out = fmt::format("  stage {}    {}: {}", k, st.name, describe_end(st));
+    if (st.frames_every > 0) out += fmt::format(", frames every {} steps", st.frames_every);
+    log.info(out);
+  }
+  log.info(fmt::format("  output     {} (resolved scenario: scenario.resolved.toml)",
+                       sc.simulation.output_dir));
+}
+
+void warn_wall_overlaps(RunLog& log, const World& world) {
+  const ParticleStore& p = world.particles();
+  for (const Wall& w : world.walls()) {
+    std::size_t n = 0;
+    for (std::size_t i = 0; i < p.size(); ++i)
+      if (wall_proximity(w, p.position[i]).distance < p.radius[i]) ++n;
+    if (n > 0)
+      log.warn(fmt::format("{} particles overlap wall \"{}\" at the start (or lie behind it)", n,
+                           w.name));
+  }
+}
+
+// Removes what an earlier run into the same folder left and this one would
+// not overwrite (frames beyond this run's last, stage files of other names):
+// only files with the names a run writes.
+void remove_previous_outputs(const std::string& dir) {
+  std::error_code ec;
+  auto starts = [](const std::string& s, const char* p) { return s.rfind(p, 0) == 0; };
+  auto ends = [](const std::string& s, const std::string& e) {
+    return s.size() >= e.size() && s.compare(s.size() - e.size(), e.size(), e) == 0;
+  };
+  for (const char* f : {"particles.pvd", "contacts.pvd"}) fs::remove(fs::path(dir) / f, ec);
+  for (const auto& e : fs::directory_iterator(dir, ec)) {
+    const std::string n = e.path().filename().string();
+    if (starts(n, "stage_") && ends(n, "_particles.txt")) fs::remove(e.path(), ec);
+  }
+  for (const auto& e : fs::directory_iterator(fs::path(dir) / "frames", ec)) {
+    const std::string n = e.path().filename().string();
+    if ((starts(n, "particles_") && ends(n, ".vtu")) || (starts(n, "contacts_") && ends(n, ".vtp")))
+      fs::remove(e.path(), ec);
+  }
+}
+
+// Applies a stage's changes, in the documented order.
+void apply_changes(RunLog& log, World& world, const StageSpec& st, const std::string& path,
+                   StageReport& rep) {
+  for (const std::string& name : st.remove_walls) {
+    world.remove_wall(name);
+    log.info(fmt::format("  removed wall {}", name));
+  }
+  if (st.remove_particles) {
+    const ParticleStore& p = world.particles();
+    const Box box = st.remove_particles->box;
+    const bool outside = st.remove_particles->outside;
+    rep.particles_removed = world.remove_particles(
+        [&](std::size_t i) { return box.contains(p.position[i]) != outside; });
+    log.info(fmt::format("  removed {} particles {} the box [{:g}, {:g}, {:g}]-[{:g}, {:g}, {:g}] "
+                         "m; {} left",
+                         rep.particles_removed, outside ? "outside" : "inside", box.lo.x, box.lo.y,
+                         box.lo.z, box.hi.x, box.hi.y, box.hi.z, p.size()));
+  }
+  for (const WallChange& c : st.walls) {
+    const std::size_t k = world.wall_index(c.name);
+    if (c.velocity) world.set_wall_velocity(k, *c.velocity);
+    if (c.contact) world.set_wall_defaults(k, *c.contact);
+  }
+  if (st.gravity) {
+    world.set_body_field(st.gravity->field());
+    log.info("  gravity " + describe(*st.gravity));
+  }
+  if (st.ball_ball) {
+    world.set_ball_ball_defaults(*st.ball_ball);
+    log.info("  new ball-ball contacts: " + describe(*st.ball_ball));
+  }
+  if (st.modify_contacts) {
+    const ParticleStore& p = world.particles();
+    const std::optional<Box> region = st.modify_contacts->region;
+    const ContactPatch& set = st.modify_contacts->set;
+    const std::string key = path + ".modify_contacts.set";
+    rep.contacts_modified = world.modify_ball_ball_contacts(
+        [&](std::size_t i, std::size_t j) {
+          return !region || (region->contains(p.position[i]) && region->contains(p.position[j]));
+        },
+        [&](ContactProperties& c) {
+          c = apply(set, c);
+          validate(c, key);
+        });
+    log.info(fmt::format("  modified {} existing ball-ball contacts", rep.contacts_modified));
+  }
+  if (st.local_damping) world.set_local_damping(*st.local_damping);
+  if (st.reset_displacements) world.reset_displacements();
+}
+
+} // namespace
+
+RunReport run_scenario(Scenario sc, const RunOptions& opt) {
+  const auto run_start = Clock::now();
+  if (opt.threads) {
+    if (*opt.threads < 0)
+      throw InputError("--threads", fmt::format("{}", *opt.threads),
+                       "must be >= 0 (0 = the OpenMP default)");
+    sc.simulation.world.threads = *opt.threads;
+  }
+  if (!opt.output_dir.empty()) sc.simulation.output_dir = opt.output_dir;
+  const std::string dir = sc.simulation.output_dir;
+  const int threads =
+      sc.simulation.world.threads > 0 ? sc.simulation.world.threads : omp_get_max_threads();
+
+  World world = build_world(sc);
+  // A fixed timestep above the critical one fails now, before any output.
+  if (const double dt = sc.simulation.world.timestep_s; dt > 0 && world.particles().size() > 0) {
+    const double crit = world.critical_timestep();
+    if (dt > crit)
+      throw InputError("simulation.timestep_s", fmt::format("{:.4g}", dt),
+                       fmt::format("above the critical timestep {:.4g} s estimated from the "
+                                   "particles' masses and contact stiffnesses; use at most "
+                                   "{:.4g} s (safety factor {:g}) or \"auto\"",
+                                   crit, sc.simulation.world.timestep_safety_factor * crit,
+                                   sc.simulation.world.timestep_safety_factor));
+  }
+
+  RunLog log(opt.out, opt.err);
+  make_directories(dir);
+  remove_previous_outputs(dir);
+  log.open(path_in(dir, "log.txt"));
+  write_text_file(path_in(dir, "scenario.resolved.toml"), resolved_toml(sc));
+  echo(log, sc, world, threads);
+  warn_wall_overlaps(log, world);
+
+  std::vector<std::string> wall_names;
+  for (const WallSpec& w : sc.walls) wall_names.push_back(w.name);
+  MeasurementTable table(path_in(dir, "measurements.csv"), wall_names);
+  FrameWriter frames(dir);
+  Summary summary(path_in(dir, "summary.json"), sc, threads);
+  RunReport report;
+  report.output_dir = dir;
+  const double progress_every = sc.simulation.progress_interval_s;
+
+  std::size_t k = 0;
+  try {
+    for (k = 0; k < sc.stages.size(); ++k) {
+      const StageSpec& st = sc.stages[k];
+      const std::string path = fmt::format("stages[{}]", k);
+      const auto stage_start = Clock::now();
+      StageReport rep;
+      rep.name = st.name;
+      rep.end = st.end;
+      log.info(fmt::format("stage {} {}: {}", k, st.name, describe_end(st)));
+      apply_changes(log, world, st, path, rep);
+      rep.first_step = world.step_count();
+      rep.start_time_s = world.time();
+      const std::size_t frames_before = frames.count();
+      if (st.frames_every > 0) frames.write(world);
+
+      // Cycle in chunks; measure, write frames, check equilibrium and print
+      // progress only between chunks.
+      const double n_particles = static_cast<double>(world.particles().size());
+      const double t0 = world.time();
+      const double t_end = t0 + st.time_s;
+      long done = 0;
+      // Chunks of about a million particle-steps. The chunk length must not
+      // depend on the wall clock: World::cycle re-estimates the automatic
+      // timestep at each call, so the chunking is part of the trajectory.
+      const long chunk =
+          std::clamp(static_cast<long>(1e6 / std::max(n_particles, 1.0)), 50L, 1000L);
+      double cycle_seconds = 0;
+      double ratio = std::numeric_limits<double>::quiet_NaN();
+      long trend_step = -1;
+      double trend_ratio = 0;
+      auto last_progress = Clock::now();
+      auto next_multiple = [&](long every) {
+        return every > 0 ? (done / every + 1) * every : std::numeric_limits<long>::max();
+      };
+      for (;;) {
+        long want = 0;
+        if (st.end == StageEnd::steps) {
+          want = st.steps - done;
+        } else if (st.end == StageEnd::time) {
+          const double left = t_end - world.time();
+          if (left <= 1e-12 * st.time_s) break;
+          const double dt = world.timestep();
+          want = dt > 0 ? std::max(static_cast<long>(std::ceil(left / dt)), 1L) : 1;
+          // The automatic timestep may grow within a chunk: close in by
+          // halves so that the stage ends within a step of its time.
+          if (world.settings().timestep_s <= 0) want = want > 4 ? (want + 1) / 2 : 1;
+        } else {
+          if (rep.reached_equilibrium) break;
+          want = std::min(st.equilibrium_max_steps, next_multiple(st.equilibrium_check_interval)) -
+                 done;
+        }
+        if (want <= 0) break;
+        const long n = std::min({want, chunk, next_multiple(st.frames_every) - done,
+                                 next_multiple(st.measure_every) - done});
+        const auto c0 = Clock::now();
+        world.cycle(n);
+        cycle_seconds += seconds_since(c0);
+        done += n;
+        if (st.end == StageEnd::equilibrium &&
+            (done % st.equilibrium_check_interval == 0 || done >= st.equilibrium_max_steps)) {
+          ratio = world.mean_unbalanced_force_ratio();
+          if (ratio < st.equilibrium_ratio) rep.reached_equilibrium = true;
+        }
+        if (st.frames_every > 0 && done % st.frames_every == 0) frames.write(world);
+        if (st.measure_every > 0 && done % st.measure_every == 0)
+          table.row(world, world.measure(), st.name);
+
+        if (seconds_since(last_progress) >= progress_every) {
+          last_progress = Clock::now();
+          const double rate = static_cast<double>(done) / std::max(cycle_seconds, 1e-9);
+          std::string where;
+          double eta = std::numeric_limits<double>::quiet_NaN();
+          if (st.end == StageEnd::steps) {
+            where = fmt::format("step {}/{} ({:.0f}%)", done, st.steps,
+                                100.0 * static_cast<double>(done) / static_cast<double>(st.steps));
+            eta = static_cast<double>(st.steps - done) / rate;
+          } else if (st.end == StageEnd::time) {
+            const double frac = (world.time() - t0) / st.time_s;
+            where = fmt::format("step {} ({:.0f}% of {:g} s)", done, 100.0 * frac, st.time_s);
+            eta = frac > 0 ? seconds_since(stage_start) * (1 - frac) / frac : eta;
+          } else {
+            if (std::isnan(ratio)) ratio = world.mean_unbalanced_force_ratio();
+            where = fmt::format("step {} (ratio {:.3e}, target {:.1e})", done, ratio,
+                                st.equilibrium_ratio);
+            // Extrapolate the ratio's log-linear decay since the last line.
+            if (trend_step >= 0 && ratio < trend_ratio && ratio > 0) {
+              const double slope =
+                  std::log(ratio / trend_ratio) / static_cast<double>(done - trend_step);
+              const double steps_left = std::log(st.equilibrium_ratio / ratio) / slope;
+              eta =
+                  std::min(steps_left, static_cast<double>(st.equilibrium_max_steps - done)) / rate;
+            }
+            trend_step = done;
+            trend_ratio = ratio;
+          }
+          log.progress(fmt::format("  [{}] {}  t = {:.6g} s  {:.3g} particle-steps/s  ETA {}",
+                                   st.name, where, world.time(), rate * n_particles,
+                                   duration(eta)));
+        }
+      }
+
+      // The stage's end: measurements, particles, a frame, a line.
+      const Measurements m = world.measure();
+      table.row(world, m, st.name);
+      if (st.frames_every > 0) frames.write(world);
+      rep.steps = done;
+      rep.time_s = world.time() - rep.start_time_s;
+      rep.end_state = m;
+      rep.walls = read_walls(world);
+      rep.particles_file = fmt::format("stage_{:02d}_{}_particles.txt", k, st.name);
+      write_particle_file(world, path_in(dir, rep.particles_file));
+      rep.frames = frames.count() - frames_before;
+      rep.wall_time_s = seconds_since(stage_start);
+      rep.particle_steps_per_s =
+          cycle_seconds > 0 ? n_particles * static_cast<double>(done) / cycle_seconds : 0.0;
+      std::string how;
+      if (st.end == StageEnd::equilibrium)
+        how = rep.reached_equilibrium
+                  ? fmt::format(" (equilibrium: ratio {:.3e} < {:g})",
+                                m.mean_unbalanced_force_ratio, st.equilibrium_ratio)
+                  : fmt::format(" (NOT in equilibrium after max_steps: ratio {:.3e} >= {:g})",
+                                m.mean_unbalanced_force_ratio, st.equilibrium_ratio);
+      log.info(fmt::format("stage {} {} done: {} steps{}, t = {:.6g} s (+{:.4g} s); "
+                           "particles {}, contacts {} ball-ball + {} ball-wall, coordination "
+                           "{:.3f}, ratio {:.3e}, kinetic energy {:.4g} J, max overlap {:.3g} r; "
+                           "{} wall time, {:.3g} particle-steps/s",
+                           k, st.name, done, how, world.time(), rep.time_s, m.particles,
+                           m.ball_ball_contacts, m.ball_wall_contacts, m.coordination_number,
+                           m.mean_unbalanced_force_ratio, m.kinetic_energy_J, m.max_overlap_ratio,
+                           duration(rep.wall_time_s), rep.particle_steps_per_s));
+      if (!rep.walls.empty()) {
+        std::string w = "  wall forces [N]:";
+        for (const WallReading& r : rep.walls)
+          w += fmt::format(" {} [{:.4g}, {:.4g}, {:.4g}] ({} contacts);", r.name, r.force_N.x,
+                           r.force_N.y, r.force_N.z, r.contacts);
+        w.pop_back();
+        log.info(w);
+      }
+      if (st.end == StageEnd::equilibrium && !rep.reached_equilibrium)
+        log.warn(fmt::format("stage {} {} stopped at max_steps = {} before reaching ratio {:g}", k,
+                             st.name, st.equilibrium_max_steps, st.equilibrium_ratio));
+      report.stages.push_back(rep);
+      report.wall_time_s = seconds_since(run_start);
+      summary.write(report, k + 1 == sc.stages.size() ? "completed" : "running", "");
+    }
+  } catch (const InstabilityError& e) {
+    report.wall_time_s = seconds_since(run_start);
+    log.note(fmt::format("unstable in stage {}: {}", k, e.what()));
+    summary.write(report, "unstable", e.what());
+    throw;
+  } catch (const InputError& e) {
+    report.wall_time_s = seconds_since(run_start);
+    log.note(fmt::format("input error in stage {}: {}", k, e.what()));
+    summary.write(report, "input error", e.what());
+    throw;
+  }
+  report.wall_time_s = seconds_since(run_start);
+  summary.write(report, "completed", "");
+  log.info(fmt::format("done in {}: {}", duration(report.wall_time_s), dir));
+  return report;
+}
+
+} // namespace centridem

@@ -1,0 +1,465 @@
+// A small 3-stage scenario run end to end through the library API (run
+// folder, ParaView files read back as XML), and the `centridem run` binary on
+// a bad scenario (exit code 2 and the message).
+#include "core/errors.hpp"
+#include "io/scenario.hpp"
+#include "io/vtk.hpp"
+#include "procedures/staged_run.hpp"
+
+#include <cstdlib>
+#include <filesystem>
+#include <fmt/format.h>
+#include <fstream>
+#include <gtest/gtest.h>
+#include <map>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+#include <sys/wait.h>
+#include <unistd.h>
+#include <vector>
+
+namespace fs = std::filesystem;
+using namespace centridem;
+
+namespace {
+
+// ---- a minimal XML reader: elements, attributes, text; throws on malformed input
+struct Xml {
+  std::string name;
+  std::map<std::string, std::string> attr;
+  std::string text;
+  std::vector<std::unique_ptr<Xml>> children;
+
+  const Xml* child(const std::string& n) const {
+    for (const auto& c : children)
+      if (c->name == n) return c.get();
+    return nullptr;
+  }
+  void find_all(const std::string& n, std::vector<const Xml*>& out) const {
+    if (name == n) out.push_back(this);
+    for (const auto& c : children) c->find_all(n, out);
+  }
+};
+
+class XmlParser {
+public:
+  explicit XmlParser(std::string s) : s_(std::move(s)) {}
+  std::unique_ptr<Xml> document() {
+    skip_space();
+    if (s_.compare(i_, 5, "<?xml") == 0) i_ = s_.find("?>", i_) + 2;
+    skip_space();
+    auto root = element();
+    skip_space();
+    if (i_ != s_.size()) throw std::runtime_error("content after the root element");
+    return root;
+  }
+
+private:
+  void skip_space() {
+    while (i_ < s_.size() && std::isspace(static_cast<unsigned char>(s_[i_]))) ++i_;
+  }
+  std::string ident() {
+    const std::size_t b = i_;
+    while (i_ < s_.size() && (std::isalnum(static_cast<unsigned char>(s_[i_])) || s_[i_] == '_'))
+      ++i_;
+    if (b == i_) throw std::runtime_error(fmt::format("name expected at {}", b));
+    return s_.substr(b, i_ - b);
+  }
+  void expect(char c) {
+    if (i_ >= s_.size() || s_[i_] != c)
+      throw std::runtime_error(fmt::format("'{}' expected at {}", c, i_));
+    ++i_;
+  }
+  std::unique_ptr<Xml> element() {
+    auto e = std::make_unique<Xml>();
+    expect('<');
+    e->name = ident();
+    for (;;) {
+      skip_space();
+      if (s_.compare(i_, 2, "/>") == 0) {
+        i_ += 2;
+        return e;
+      }
+      if (s_[i_] == '>') {
+        ++i_;
+        break;
+      }
+      const std::string a = ident();
+      expect('=');
+      expect('"');
+      const std::size_t end = s_.find('"', i_);
+      if (end == std::string::npos) throw std::runtime_error("unterminated attribute");
+      if (!e->attr.emplace(a, s_.substr(i_, end - i_)).second)
+        throw std::runtime_error("duplicate attribute " + a);
+      i_ = end + 1;
+    }
+    for (;;) {
+      const std::size_t lt = s_.find('<', i_);
+      if (lt == std::string::npos) throw std::runtime_error("unclosed <" + e->name + ">");
+      e->text += s_.substr(i_, lt - i_);
+      i_ = lt;
+      if (s_.compare(i_, 2, "</") == 0) {
+        i_ += 2;
+        if (ident() != e->name) throw std::runtime_error("mismatched </...> for " + e->name);
+        skip_space();
+        expect('>');
+        return e;
+      }
+      e->children.push_back(element());
+    }
+  }
+  std::string s_;
+  std::size_t i_ = 0;
+};
+
+std::string read_file(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+std::unique_ptr<Xml> read_xml(const fs::path& p) {
+  return XmlParser(read_file(p)).document();
+}
+
+std::vector<double> numbers(const std::string& text) {
+  std::vector<double> v;
+  std::istringstream in(text);
+  double x;
+  while (in >> x) v.push_back(x);
+  EXPECT_TRUE(in.eof()) << "a DataArray holds something that is not a number";
+  return v;
+}
+
+// Checks a .vtu: well-formed, every array sized for its points/cells;
+// returns the number of points.
+std::size_t check_vtu(const fs::path& p) {
+  const auto doc = read_xml(p);
+  EXPECT_EQ(doc->name, "VTKFile");
+  EXPECT_EQ(doc->attr.at("type"), "UnstructuredGrid");
+  const Xml* piece = doc->child("UnstructuredGrid")->child("Piece");
+  const std::size_t n = std::stoul(piece->attr.at("NumberOfPoints"));
+  EXPECT_EQ(std::stoul(piece->attr.at("NumberOfCells")), n);
+  std::vector<const Xml*> arrays;
+  piece->find_all("DataArray", arrays);
+  std::map<std::string, std::size_t> seen;
+  for (const Xml* a : arrays) {
+    const std::size_t comps =
+        a->attr.count("NumberOfComponents") ? std::stoul(a->attr.at("NumberOfComponents")) : 1;
+    EXPECT_EQ(a->attr.at("format"), "ascii");
+    EXPECT_EQ(numbers(a->text).size(), n * comps) << a->attr.at("Name");
+    seen[a->attr.at("Name")] = comps;
+  }
+  for (const auto& [name, comps] : std::map<std::string, std::size_t>{{"radius", 1},
+                                                                      {"id", 1},
+                                                                      {"group", 1},
+                                                                      {"velocity", 3},
+                                                                      {"displacement", 3},
+                                                                      {"displacement_magnitude", 1},
+                                                                      {"spin", 3},
+                                                                      {"force", 3},
+                                                                      {"Points", 3},
+                                                                      {"connectivity", 1},
+                                                                      {"offsets", 1},
+                                                                      {"types", 1}})
+    EXPECT_EQ(seen[name], comps) << name;
+  return n;
+}
+
+// Checks a .vtp: lines between existing points, cell data per line.
+std::size_t check_vtp(const fs::path& p) {
+  const auto doc = read_xml(p);
+  EXPECT_EQ(doc->attr.at("type"), "PolyData");
+  const Xml* piece = doc->child("PolyData")->child("Piece");
+  const std::size_t np = std::stoul(piece->attr.at("NumberOfPoints"));
+  const std::size_t nl = std::stoul(piece->attr.at("NumberOfLines"));
+  std::vector<const Xml*> arrays;
+  piece->find_all("DataArray", arrays);
+  for (const Xml* a : arrays) {
+    const std::string name = a->attr.count("Name") ? a->attr.at("Name") : "";
+    const auto v = numbers(a->text);
+    if (name == "Points") EXPECT_EQ(v.size(), 3 * np);
+    if (name == "force_N") EXPECT_EQ(v.size(), 3 * nl);
+    if (name == "normal_force_N" || name == "overlap_m" || name == "offsets")
+      EXPECT_EQ(v.size(), nl) << name;
+    if (name == "connectivity") {
+      EXPECT_EQ(v.size(), 2 * nl);
+      for (double k : v) EXPECT_LT(k, static_cast<double>(np));
+    }
+  }
+  return nl;
+}
+
+std::vector<std::pair<double, std::string>> read_pvd(const fs::path& p) {
+  const auto doc = read_xml(p);
+  EXPECT_EQ(doc->attr.at("type"), "Collection");
+  std::vector<std::pair<double, std::string>> out;
+  for (const auto& d : doc->child("Collection")->children)
+    out.emplace_back(std::stod(d->attr.at("timestep")), d->attr.at("file"));
+  return out;
+}
+
+class StagedRunTest : public ::testing::Test {
+protected:
+  void SetUp() override {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    dir_ = fs::temp_directory_path() /
+           fmt::format("centridem_run_{}_{}_{}", getpid(), info->test_suite_name(), info->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+    // 3 x 3 x 3 spheres of radius 0.4 mm at a pitch of 1 mm in a 3 mm box.
+    std::string grains;
+    for (int k = 0; k < 3; ++k)
+      for (int j = 0; j < 3; ++j)
+        for (int i = 0; i < 3; ++i)
+          grains += fmt::format("{} {} {} 0.0004\n", 0.0005 + 0.001 * i, 0.0005 + 0.001 * j,
+                                0.0005 + 0.001 * k);
+    std::ofstream(dir_ / "grains.xyzr") << grains;
+  }
+  void TearDown() override {
+    std::error_code ec;
+    fs::remove_all(dir_, ec);
+  }
+  fs::path write(const std::string& name, const std::string& text) {
+    std::ofstream(dir_ / name, std::ios::binary) << text;
+    return dir_ / name;
+  }
+  fs::path dir_;
+};
+
+const char* kThreeStages = R"(
+[simulation]
+local_damping = 0.7
+threads = 1
+progress_interval_s = 0
+
+[particles]
+file = "grains.xyzr"
+density_kg_m3 = 2633
+group = 3
+
+[contact.ball_ball]
+model = "arrlinear"
+effective_modulus_Pa = 10e6
+friction = 0.5
+rolling_friction = 0.16
+attraction_force_N = 1e-5
+
+[contact.ball_wall]
+model = "linear"
+effective_modulus_Pa = 10e6
+friction = 0.2
+
+[gravity]
+g_level = 100
+
+[[walls]]
+name = "floor"
+type = "plane"
+point_m = [0, 0, 0]
+normal = [0, 0, 1]
+[[walls]]
+name = "x0"
+type = "plane"
+point_m = [0, 0, 0]
+normal = [1, 0, 0]
+[[walls]]
+name = "x1"
+type = "rectangle"
+centre_m = [0.003, 0.0015, 0.0015]
+normal = [-1, 0, 0]
+u_direction = [0, 1, 0]
+size_m = [0.003, 0.003]
+
+[[stages]]
+name = "settle"
+steps = 300
+frames_every = 100
+measure_every = 50
+
+[[stages]]
+name = "change"
+contact.ball_ball = { attraction_force_N = 0 }
+modify_contacts = { set = { rolling_friction = 0 } }
+walls = { x0 = { velocity_m_per_s = [0.001, 0, 0], contact = { friction = 0.1 } } }
+until_equilibrium = { ratio = 1e-12, max_steps = 200, check_interval = 50 }
+frames_every = 100
+
+[[stages]]
+name = "excavate"
+remove_walls = ["x1"]
+remove_particles = { region = { lo = [0, 0, 0.0011], hi = [1, 1, 1] } }
+reset_displacements = true
+walls = { x0 = { velocity_m_per_s = [0, 0, 0] } }
+time_s = 2e-4
+frames_every = 40
+measure_every = 0
+)";
+
+} // namespace
+
+TEST_F(StagedRunTest, ThreeStagesWriteTheRunFolder) {
+  Scenario sc = load_scenario(write("three.toml", kThreeStages).string());
+  const fs::path out = dir_ / "out";
+  RunOptions o;
+  o.output_dir = out.string();
+  o.out = o.err = nullptr; // quiet: everything still goes to log.txt
+  const RunReport r = run_scenario(sc, o);
+
+  ASSERT_EQ(r.stages.size(), 3u);
+  EXPECT_EQ(r.stages[0].steps, 300);
+  EXPECT_EQ(r.stages[1].steps, 200);
+  EXPECT_FALSE(r.stages[1].reached_equilibrium);
+  EXPECT_GT(r.stages[1].contacts_modified, 0u);
+  EXPECT_GE(r.stages[2].time_s, 2e-4);
+  EXPECT_LT(r.stages[2].time_s, 2e-4 + 2 * r.stages[2].end_state.timestep_s);
+  EXPECT_GT(r.stages[2].particles_removed, 0u);
+  const std::size_t left = r.stages[2].end_state.particles;
+  EXPECT_EQ(left + r.stages[2].particles_removed, 27u);
+
+  for (const char* f : {"log.txt", "summary.json", "measurements.csv", "scenario.resolved.toml",
+                        "particles.pvd", "contacts.pvd", "stage_00_settle_particles.txt",
+                        "stage_01_change_particles.txt", "stage_02_excavate_particles.txt"})
+    EXPECT_TRUE(fs::is_regular_file(out / f)) << f;
+
+  // The .pvd series list every frame, in time order, and the files exist.
+  const auto particles = read_pvd(out / "particles.pvd");
+  const auto contacts = read_pvd(out / "contacts.pvd");
+  std::size_t frames = 0;
+  for (const StageReport& s : r.stages) frames += s.frames;
+  // settle: steps 0..300 every 100 -> 4; change: 100, 200 (its start is the
+  // same step as settle's end) -> 2; excavate: its start replaces change's
+  // end frame, then every 40 steps and the end.
+  EXPECT_EQ(r.stages[0].frames, 4u);
+  EXPECT_EQ(r.stages[1].frames, 2u);
+  ASSERT_EQ(particles.size(), frames);
+  ASSERT_EQ(contacts.size(), frames);
+  for (std::size_t k = 0; k < particles.size(); ++k) {
+    EXPECT_EQ(particles[k].second, fmt::format("frames/particles_{:06d}.vtu", k));
+    EXPECT_EQ(contacts[k].second, fmt::format("frames/contacts_{:06d}.vtp", k));
+    if (k > 0) EXPECT_GT(particles[k].first, particles[k - 1].first);
+    EXPECT_EQ(particles[k].first, contacts[k].first);
+  }
+  EXPECT_EQ(particles.front().first, 0.0);
+  EXPECT_NEAR(particles.back().first, r.stages[2].start_time_s + r.stages[2].time_s, 1e-15);
+
+  // Every frame parses; the first holds all particles, the last those left.
+  for (std::size_t k = 0; k < particles.size(); ++k) {
+    SCOPED_TRACE(particles[k].second);
+    const std::size_t n = check_vtu(out / particles[k].second);
+    check_vtp(out / contacts[k].second);
+    if (k == 0) EXPECT_EQ(n, 27u);
+    if (k + 1 == particles.size()) EXPECT_EQ(n, left);
+  }
+  EXPECT_GT(check_vtp(out / contacts[3].second), 0u); // settled: force chains
+
+  // summary.json
+  const auto j = nlohmann::json::parse(read_file(out / "summary.json"));
+  EXPECT_EQ(j["status"], "completed");
+  ASSERT_EQ(j["stages"].size(), 3u);
+  EXPECT_EQ(j["stages"][1]["name"], "change");
+  EXPECT_EQ(j["stages"][1]["reached_equilibrium"], false);
+  for (const char* key : {"coordination_number", "mean_unbalanced_force_ratio", "kinetic_energy_J",
+                          "ball_ball_contacts", "walls"})
+    EXPECT_TRUE(j["stages"][0]["measurements"].contains(key)) << key;
+  EXPECT_TRUE(j["stages"][0]["measurements"]["walls"].contains("x1"));
+  EXPECT_FALSE(j["stages"][2]["measurements"]["walls"].contains("x1")); // removed
+  EXPECT_GT(j["stages"][0]["particle_steps_per_s"].get<double>(), 0.0);
+
+  // measurements.csv: a header with each wall's force, rows of equal width.
+  std::istringstream csv(read_file(out / "measurements.csv"));
+  std::string header, line;
+  std::getline(csv, header);
+  EXPECT_EQ(
+      header.rfind("step,time_s,stage,ratio,kinetic_energy_J,coordination_number,contacts", 0), 0u);
+  EXPECT_NE(header.find("x1_force_z_N"), std::string::npos);
+  const auto width = std::count(header.begin(), header.end(), ',');
+  int rows = 0;
+  while (std::getline(csv, line)) {
+    EXPECT_EQ(std::count(line.begin(), line.end(), ','), width) << line;
+    ++rows;
+  }
+  EXPECT_EQ(rows, 6 + 1 + 1); // settle every 50 steps; change and excavate at their ends
+
+  // Stage particle files: x y z r vx vy vz per particle.
+  std::istringstream last(read_file(out / "stage_02_excavate_particles.txt"));
+  std::size_t n = 0;
+  while (std::getline(last, line))
+    if (!line.empty() && line[0] != '#') {
+      EXPECT_EQ(numbers(line).size(), 7u);
+      ++n;
+    }
+  EXPECT_EQ(n, left);
+
+  // The log holds what was printed; the resolved scenario reads back.
+  const std::string log = read_file(out / "log.txt");
+  EXPECT_NE(log.find("stage 2 excavate done"), std::string::npos);
+  EXPECT_NO_THROW(load_scenario((out / "scenario.resolved.toml").string()));
+
+  // Same scenario, same threads: the same result, bit for bit.
+  o.output_dir = (dir_ / "again").string();
+  run_scenario(sc, o);
+  EXPECT_EQ(read_file(dir_ / "again" / "stage_02_excavate_particles.txt"),
+            read_file(out / "stage_02_excavate_particles.txt"));
+}
+
+TEST_F(StagedRunTest, BinaryExitsWithCode2OnBadInput) {
+  std::string bad = kThreeStages;
+  bad.replace(bad.find("friction = 0.5"), 14, "frcition = 0.5");
+  const fs::path scenario = write("bad.toml", bad);
+  const fs::path err = dir_ / "stderr.txt";
+  const std::string cmd =
+      fmt::format("'{}' run '{}' --out '{}' 2> '{}' > /dev/null", CENTRIDEM_BINARY,
+                  scenario.string(), (dir_ / "out").string(), err.string());
+  const int status = std::system(cmd.c_str());
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 2);
+  const std::string msg = read_file(err);
+  EXPECT_EQ(msg.rfind("centridem: error: ", 0), 0u) << msg;
+  EXPECT_NE(msg.find("contact.ball_ball.frcition"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("did you mean \"friction\""), std::string::npos) << msg;
+  EXPECT_FALSE(fs::exists(dir_ / "out")); // nothing written for bad input
+}
+
+TEST_F(StagedRunTest, BinaryRunsAScenario) {
+  std::string quick = kThreeStages;
+  quick.replace(quick.find("steps = 300"), 11, "steps = 20");
+  const fs::path scenario = write("quick.toml", quick);
+  const std::string cmd =
+      fmt::format("'{}' run '{}' --out '{}' --threads 1 > '{}' 2>&1", CENTRIDEM_BINARY,
+                  scenario.string(), (dir_ / "out").string(), (dir_ / "stdout.txt").string());
+  const int status = std::system(cmd.c_str());
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 0) << read_file(dir_ / "stdout.txt");
+  EXPECT_TRUE(fs::is_regular_file(dir_ / "out" / "summary.json"));
+  EXPECT_NE(read_file(dir_ / "stdout.txt").find("stage 0 settle done: 20 steps"),
+            std::string::npos);
+  // Again into the same folder: what the first run left and this one does
+  // not write goes; other files stay.
+  std::ofstream(dir_ / "out" / "frames" / "particles_999999.vtu") << "old";
+  std::ofstream(dir_ / "out" / "stage_07_old_particles.txt") << "old";
+  std::ofstream(dir_ / "out" / "notes.txt") << "mine";
+  ASSERT_EQ(std::system(cmd.c_str()), 0);
+  EXPECT_FALSE(fs::exists(dir_ / "out" / "frames" / "particles_999999.vtu"));
+  EXPECT_FALSE(fs::exists(dir_ / "out" / "stage_07_old_particles.txt"));
+  EXPECT_TRUE(fs::exists(dir_ / "out" / "notes.txt"));
+  EXPECT_TRUE(fs::exists(dir_ / "out" / "frames" / "particles_000000.vtu"));
+}
+
+TEST(Vtk, EmptyWorldWritesValidFiles) {
+  const fs::path dir = fs::temp_directory_path() / fmt::format("centridem_vtk_{}", getpid());
+  fs::create_directories(dir);
+  World w;
+  write_particles_vtu(w, (dir / "p.vtu").string());
+  write_contacts_vtp(w, (dir / "c.vtp").string());
+  EXPECT_EQ(check_vtu(dir / "p.vtu"), 0u);
+  EXPECT_EQ(check_vtp(dir / "c.vtp"), 0u);
+  PvdSeries s((dir / "s.pvd").string());
+  s.add(0.0, "p.vtu");
+  s.add(1e-3, "p.vtu");
+  EXPECT_EQ(read_pvd(dir / "s.pvd").size(), 2u);
+  fs::remove_all(dir);
+}
