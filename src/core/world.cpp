@@ -64,6 +64,13 @@ void World::set_local_damping(double alpha) {
   settings_ = s;
 }
 
+void World::set_max_overlap_fraction(double fraction) {
+  WorldSettings s = settings_;
+  s.max_overlap_fraction = fraction;
+  validate(s);
+  settings_ = s;
+}
+
 void World::set_fixed_timestep(double dt_s) {
   WorldSettings s = settings_;
   s.timestep_s = dt_s;

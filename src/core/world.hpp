@@ -111,6 +111,7 @@ public:
   const WorldSettings& settings() const { return settings_; }
   void set_local_damping(double alpha);
   void set_fixed_timestep(double dt_s); // 0 = automatic
+  void set_max_overlap_fraction(double fraction);
 
   // --- particles -----------------------------------------------------------
   const ParticleStore& particles() const { return p_; }

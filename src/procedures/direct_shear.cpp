@@ -87,6 +87,18 @@ DirectShearResult run_direct_shear(World& w, const DirectShearSpec& s,
   const auto t0 = std::chrono::steady_clock::now();
   const double area = s.box.length_m * s.box.width_m;
   const double target = s.normal_stress_Pa * area;
+  // Spheres whose centres lie in the box may poke through its faces; with
+  // 1 GPa walls that would fire them out. Pull each centre at least its
+  // radius inside first (ball-ball overlaps this makes are relaxed below).
+  {
+    auto& P = w.particles_mut();
+    const Vec3 hi{s.box.length_m, s.box.width_m, s.box.height_m};
+    for (std::size_t i = 0; i < P.size(); ++i)
+      for (int a = 0; a < 3; ++a)
+        P.position[i][a] =
+            std::clamp(P.position[i][a], P.radius[i], std::max(P.radius[i], hi[a] - P.radius[i]));
+    w.particles_changed();
+  }
   add_shear_box(w, s.box, s.ball_wall, s.max_shear_displacement_m);
   const std::size_t bottom = w.wall_index("bottom"), top = w.wall_index("top");
   std::vector<std::size_t> upper;
@@ -104,6 +116,23 @@ DirectShearResult run_direct_shear(World& w, const DirectShearSpec& s,
   r.target_normal_stress_Pa = s.normal_stress_Pa;
   auto normal_stress = [&] { return -dot(w.walls()[bottom].force, servo.direction) / area; };
 
+  // Fit the specimen into the box: centres inside the box leave spheres
+  // poking through the walls; push them in with calm cycles (velocities
+  // zeroed, PFC `calm`) under a tolerant overlap guard.
+  {
+    const double guard = w.settings().max_overlap_fraction;
+    w.set_max_overlap_fraction(std::max(guard, 3.0));
+    // At least one chunk: the walls' contacts exist only after a cycle.
+    for (long k = 0; k == 0 || (k < 2000 && w.measure().max_overlap_ratio > 0.05); ++k) {
+      w.cycle(10);
+      auto& P = w.particles_mut();
+      std::fill(P.velocity.begin(), P.velocity.end(), Vec3{});
+      std::fill(P.spin.begin(), P.spin.end(), Vec3{});
+      r.consolidation_steps += 10;
+    }
+    w.set_max_overlap_fraction(guard);
+  }
+
   // Consolidation: upper box fixed, servo on the bottom wall.
   const long check = std::max<long>(100, s.record_interval_steps / 4);
   while (r.consolidation_steps < s.consolidation_max_steps) {
@@ -116,6 +145,7 @@ DirectShearResult run_direct_shear(World& w, const DirectShearSpec& s,
   }
   auto height = [&] { return w.walls()[top].point.z - w.walls()[bottom].point.z; };
   r.consolidated_height_m = height();
+  r.consolidated_normal_stress_Pa = normal_stress();
   const long steps_before = w.step_count();
 
   // Shearing: contact defaults for new contacts (paper: no adhesion for
@@ -125,17 +155,24 @@ DirectShearResult run_direct_shear(World& w, const DirectShearSpec& s,
   const double x0 = w.walls()[top].point.x;
   const double t_start = w.time();
   const double strain_base = s.strain == StrainDefinition::height ? s.box.height_m : s.box.length_m;
+  const long sample = std::min<long>(10, s.record_interval_steps);
   for (;;) {
-    w.cycle(s.record_interval_steps);
+    // Stresses are averaged over the record interval (sampled every 10 steps).
+    double sum_sigma = 0, sum_fx = 0;
+    long samples = 0;
+    for (long done = 0; done < s.record_interval_steps; done += sample) {
+      w.cycle(std::min(sample, s.record_interval_steps - done));
+      sum_sigma += normal_stress();
+      for (std::size_t k : upper) sum_fx += w.walls()[k].force.x; // particles resist the -x motion
+      ++samples;
+    }
     ShearPoint p;
     p.step = w.step_count();
     p.time_s = w.time() - t_start;
     p.shear_displacement_m = x0 - w.walls()[top].point.x;
     p.shear_strain = p.shear_displacement_m / strain_base;
-    double fx = 0;
-    for (std::size_t k : upper) fx += w.walls()[k].force.x; // particles resist the -x motion
-    p.shear_stress_Pa = fx / area;
-    p.normal_stress_Pa = normal_stress();
+    p.shear_stress_Pa = sum_fx / static_cast<double>(samples) / area;
+    p.normal_stress_Pa = sum_sigma / static_cast<double>(samples);
     p.vertical_displacement_m = height() - r.consolidated_height_m;
     const double zb = w.walls()[bottom].point.z, zt = w.walls()[top].point.z;
     p.porosity = w.measure_region(Box{{0, 0, zb}, {s.box.length_m, s.box.width_m, zt}}).porosity;

@@ -61,6 +61,7 @@ struct DirectShearResult {
   double target_normal_stress_Pa = 0;
   long consolidation_steps = 0;
   double consolidated_height_m = 0;
+  double consolidated_normal_stress_Pa = 0; // bottom-wall stress when consolidation ended
   std::vector<ShearPoint> curve;
   double peak_shear_stress_Pa = 0;
   double peak_strain = 0;
