@@ -836,13 +836,34 @@ double World::critical_timestep() {
           omega2(contact_stiffness(props_[bw_.properties[e]], g), m[i], I[i], r[i], 0.0, 0.0, 0.0);
       any = true;
     }
-    if (!any) { // a free particle: as if touching one identical particle
+    if (!any) { // a free particle: as if touching one identical particle, or
+                // the stiffest wall, whichever is stiffer (it may land on either)
       const ContactGeometry g{{}, 0.0, {}, {}, r[i], 2 * r[i], 0.5 * r[i], 0.0};
       w2 = omega2(contact_stiffness(def, g), m[i], I[i], r[i], 1.0 / m[i], 1.0 / I[i], r[i]);
+      const ContactGeometry gw{{}, 0.0, {}, {}, r[i], r[i], r[i], 0.0};
+      for (const Wall& wl : walls_)
+        w2 = std::max(w2, omega2(contact_stiffness(props_[wl.properties], gw), m[i], I[i], r[i],
+                                 0.0, 0.0, 0.0));
     }
     max_omega2 = std::max(max_omega2, w2);
   }
-  return max_omega2 > 0 ? 2.0 / std::sqrt(max_omega2) : std::numeric_limits<double>::infinity();
+  // Viscous dashpots lower the stability limit of central differences from
+  // 2/omega to (2/omega)(sqrt(1 + beta^2) - beta) (e.g. Belytschko & Hughes,
+  // "Computational Methods for Transient Analysis", 1983, ch. 2), with beta
+  // the largest dashpot ratio of the property sets in use.
+  double beta = 0.0;
+  auto consider = [&](std::uint16_t k) {
+    beta = std::max({beta, props_[k].dashpot_normal_ratio, props_[k].dashpot_shear_ratio});
+  };
+  consider(ball_ball_default_);
+  for (const Wall& wl : walls_) consider(wl.properties);
+  for (std::uint16_t k : bb_.properties)
+    if (k != kNoContact) consider(k);
+  for (std::uint16_t k : bw_.properties)
+    if (k != kNoContact) consider(k);
+  const double damping_factor = std::sqrt(1.0 + beta * beta) - beta;
+  return max_omega2 > 0 ? damping_factor * 2.0 / std::sqrt(max_omega2)
+                        : std::numeric_limits<double>::infinity();
 }
 
 void World::update_timestep(bool force_estimate) {
@@ -869,7 +890,8 @@ void World::cycle(long steps) {
               "and contact stiffnesses; use at most {:.4g} s (safety factor {}) or \"auto\"",
               crit, settings_.timestep_safety_factor * crit, settings_.timestep_safety_factor));
   }
-  update_timestep(true);
+  // The automatic timestep is estimated on a fixed step interval and after
+  // rebuilds only, so a run does not depend on how it is split into calls.
   for (long s = 0; s < steps; ++s) {
     const bool rebuilt = dirty_;
     ensure_built();

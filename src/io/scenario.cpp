@@ -1,6 +1,7 @@
 #include "io/scenario.hpp"
 
 #include "core/errors.hpp"
+#include "io/specimen_config.hpp"
 
 #include <algorithm>
 #include <cctype>
@@ -397,7 +398,7 @@ std::string read_name(const toml::table& t, const std::string& path, const char*
 // ------------------------------------------------------------ the sections --
 
 const Keys kTopKeys = {"description", "simulation", "particles", "contact",
-                       "walls",       "gravity",    "stages"};
+                       "walls",       "gravity",    "stages",    "specimen"};
 const Keys kSimulationKeys = {
     "timestep_s",    "timestep_safety_factor", "timestep_growth_limit", "timestep_update_interval",
     "local_damping", "neighbour_skin_m",       "max_overlap_fraction",  "threads",
@@ -929,6 +930,10 @@ Scenario parse_table(const toml::table& root, const std::string& source_name,
 
   // Particles last: reading the file is the slow part, so the cheap checks
   // report first.
+  if (!root.get("particles") && root.get("specimen"))
+    missing("particles", "a [particles] table with file = \"PATH\" and density_kg_m3: `centridem "
+                         "run` does not generate the [specimen] yet; generate it with `centridem "
+                         "generate` and give the particle file it writes");
   sc.particles = read_particles(root.get("particles"), base_dir);
   return sc;
 }
@@ -946,7 +951,14 @@ Scenario parse_scenario(std::string_view text, const std::string& source_name,
     throw InputError(fmt::format("{}:{}:{}: TOML syntax error: {}", s.path ? *s.path : source_name,
                                  s.begin.line, s.begin.column, e.description()));
   }
-  return parse_table(root, source_name, base_dir);
+  Scenario sc = parse_table(root, source_name, base_dir);
+  // [specimen] is for `centridem generate` (io/specimen_config.hpp); checked
+  // here too, so that a mistake in it never passes silently.
+  if (root.contains("specimen")) {
+    parse_specimen(text, source_name, base_dir);
+    sc.has_specimen = true;
+  }
+  return sc;
 }
 
 Scenario load_scenario(const std::string& path) {
@@ -1024,6 +1036,8 @@ std::string resolved_toml(const Scenario& s) {
   std::string o;
   o += "# centridem scenario, resolved: every default made explicit (docs/scenario.md).\n";
   if (!s.source_path.empty()) o += "# Read from: " + s.source_path + "\n";
+  if (s.has_specimen)
+    o += "# The source's [specimen] table (for `centridem generate`) is not used by `run`.\n";
   o += fmt::format("description = {}\n", quote(s.description));
 
   const WorldSettings& w = s.simulation.world;

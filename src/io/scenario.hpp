@@ -143,6 +143,7 @@ struct Scenario {
   std::vector<WallSpec> walls;
   GravitySpec gravity;
   std::vector<StageSpec> stages;
+  bool has_specimen = false; // a [specimen] table (for `centridem generate`; not used by run)
 };
 
 // Reads, validates and resolves a scenario file, and reads its particle

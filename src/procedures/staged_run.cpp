@@ -311,43 +311,31 @@ void remove_previous_outputs(const std::string& dir) {
   }
 }
 
-// Applies a stage's changes, in the documented order.
-void apply_changes(RunLog& log, World& world, const StageSpec& st, const std::string& path,
-                   StageReport& rep) {
-  for (const std::string& name : st.remove_walls) {
-    world.remove_wall(name);
-    log.info(fmt::format("  removed wall {}", name));
-  }
+} // namespace
+
+StageChanges apply_stage_changes(World& world, const StageSpec& st, const std::string& path) {
+  StageChanges out;
+  for (const std::string& name : st.remove_walls) world.remove_wall(name);
   if (st.remove_particles) {
     const ParticleStore& p = world.particles();
     const Box box = st.remove_particles->box;
     const bool outside = st.remove_particles->outside;
-    rep.particles_removed = world.remove_particles(
+    out.particles_removed = world.remove_particles(
         [&](std::size_t i) { return box.contains(p.position[i]) != outside; });
-    log.info(fmt::format("  removed {} particles {} the box [{:g}, {:g}, {:g}]-[{:g}, {:g}, {:g}] "
-                         "m; {} left",
-                         rep.particles_removed, outside ? "outside" : "inside", box.lo.x, box.lo.y,
-                         box.lo.z, box.hi.x, box.hi.y, box.hi.z, p.size()));
   }
   for (const WallChange& c : st.walls) {
     const std::size_t k = world.wall_index(c.name);
     if (c.velocity) world.set_wall_velocity(k, *c.velocity);
     if (c.contact) world.set_wall_defaults(k, *c.contact);
   }
-  if (st.gravity) {
-    world.set_body_field(st.gravity->field());
-    log.info("  gravity " + describe(*st.gravity));
-  }
-  if (st.ball_ball) {
-    world.set_ball_ball_defaults(*st.ball_ball);
-    log.info("  new ball-ball contacts: " + describe(*st.ball_ball));
-  }
+  if (st.gravity) world.set_body_field(st.gravity->field());
+  if (st.ball_ball) world.set_ball_ball_defaults(*st.ball_ball);
   if (st.modify_contacts) {
     const ParticleStore& p = world.particles();
     const std::optional<Box> region = st.modify_contacts->region;
     const ContactPatch& set = st.modify_contacts->set;
     const std::string key = path + ".modify_contacts.set";
-    rep.contacts_modified = world.modify_ball_ball_contacts(
+    out.contacts_modified = world.modify_ball_ball_contacts(
         [&](std::size_t i, std::size_t j) {
           return !region || (region->contains(p.position[i]) && region->contains(p.position[j]));
         },
@@ -355,10 +343,37 @@ void apply_changes(RunLog& log, World& world, const StageSpec& st, const std::st
           c = apply(set, c);
           validate(c, key);
         });
-    log.info(fmt::format("  modified {} existing ball-ball contacts", rep.contacts_modified));
   }
   if (st.local_damping) world.set_local_damping(*st.local_damping);
   if (st.reset_displacements) world.reset_displacements();
+  return out;
+}
+
+namespace {
+
+// What a stage changed, for the log.
+void log_changes(RunLog& log, const World& world, const StageSpec& st, const StageChanges& c) {
+  for (const std::string& name : st.remove_walls) log.info("  removed wall " + name);
+  if (st.remove_particles) {
+    const Box& b = st.remove_particles->box;
+    log.info(fmt::format("  removed {} particles {} the box [{:g}, {:g}, {:g}]-[{:g}, {:g}, {:g}] "
+                         "m; {} left",
+                         c.particles_removed, st.remove_particles->outside ? "outside" : "inside",
+                         b.lo.x, b.lo.y, b.lo.z, b.hi.x, b.hi.y, b.hi.z, world.particles().size()));
+  }
+  for (const WallChange& w : st.walls) {
+    if (w.velocity)
+      log.info(fmt::format("  wall {} velocity [{:g}, {:g}, {:g}] m/s", w.name, w.velocity->x,
+                           w.velocity->y, w.velocity->z));
+    if (w.contact)
+      log.info(fmt::format("  new contacts with wall {}: {}", w.name, describe(*w.contact)));
+  }
+  if (st.gravity) log.info("  gravity " + describe(*st.gravity));
+  if (st.ball_ball) log.info("  new ball-ball contacts: " + describe(*st.ball_ball));
+  if (st.modify_contacts)
+    log.info(fmt::format("  modified {} existing ball-ball contacts", c.contacts_modified));
+  if (st.local_damping) log.info(fmt::format("  local damping {:g}", *st.local_damping));
+  if (st.reset_displacements) log.info("  displacements reset to zero");
 }
 
 } // namespace
@@ -416,7 +431,10 @@ RunReport run_scenario(Scenario sc, const RunOptions& opt) {
       rep.name = st.name;
       rep.end = st.end;
       log.info(fmt::format("stage {} {}: {}", k, st.name, describe_end(st)));
-      apply_changes(log, world, st, path, rep);
+      const StageChanges changes = apply_stage_changes(world, st, path);
+      rep.particles_removed = changes.particles_removed;
+      rep.contacts_modified = changes.contacts_modified;
+      log_changes(log, world, st, changes);
       rep.first_step = world.step_count();
       rep.start_time_s = world.time();
       const std::size_t frames_before = frames.count();

@@ -53,6 +53,17 @@ struct RunReport {
 // defaults and gravity. Throws InputError on bad content.
 World build_world(const Scenario& scenario);
 
+struct StageChanges {
+  std::size_t particles_removed = 0;
+  std::size_t contacts_modified = 0;
+};
+
+// Applies the changes a stage makes before it cycles, in the documented
+// order: remove_walls, remove_particles, walls, gravity, contact.ball_ball,
+// modify_contacts, local_damping, reset_displacements. `path` names the stage
+// in messages ("stages[2]").
+StageChanges apply_stage_changes(World& world, const StageSpec& stage, const std::string& path);
+
 // Runs every stage and writes the run folder. Throws InputError for bad
 // input (also found while running, e.g. a fixed timestep above the critical
 // one) and InstabilityError when the run goes unstable; summary.json and

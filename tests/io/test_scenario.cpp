@@ -339,6 +339,19 @@ TEST_F(ScenarioTest, TomlSyntaxErrorNamesLineAndColumn) {
                {"scenario.toml:18:", "TOML syntax error"});
 }
 
+TEST_F(ScenarioTest, SpecimenTableIsCheckedButNotUsed) {
+  const std::string specimen = "\n[specimen]\nfile = \"grains.xyzr\"\ndensity_kg_m3 = 2633\n";
+  const Scenario s = parse(kValid + specimen);
+  EXPECT_TRUE(s.has_specimen);
+  EXPECT_NE(resolved_toml(s).find("[specimen] table"), std::string::npos);
+  expect_error([&] { parse(kValid + "\n[specimen]\nfile = \"grains.xyzr\"\n"); },
+               {"specimen.density_kg_m3 = (missing)"});
+  const std::string block = "[particles]\nfile = \"grains.xyzr\"\ndensity_kg_m3 = 2633\n";
+  std::string no_particles = kValid + specimen;
+  no_particles.erase(no_particles.find(block), block.size());
+  expect_error([&] { parse(no_particles); }, {"particles = (missing)", "centridem generate"});
+}
+
 TEST(ScenarioHelpers, DidYouMean) {
   const std::vector<std::string_view> keys = {"friction", "rolling_friction", "density_kg_m3"};
   EXPECT_EQ(did_you_mean("frction", keys), "friction");

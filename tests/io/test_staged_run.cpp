@@ -449,6 +449,61 @@ TEST_F(StagedRunTest, BinaryRunsAScenario) {
   EXPECT_TRUE(fs::exists(dir_ / "out" / "frames" / "particles_000000.vtu"));
 }
 
+// The paper's stage semantics through a stage's changes: `contact.ball_ball =
+// { attraction_force_N = 0 }` gives new contacts no adhesion while the old
+// keep theirs; `modify_contacts` changes existing contacts in its region only.
+TEST_F(StagedRunTest, NewContactsCopyTheStageDefaultsOldKeepTheirs) {
+  const double r = 0.0005;
+  std::ofstream(dir_ / "three.xyzr")
+      << fmt::format("0 0 0 {0}\n{1} 0 0 {0}\n{1} 0 {2} {0}\n", r, 2 * r - 1e-7, 2 * r + 1e-6);
+  const Scenario sc = load_scenario(write("s.toml", R"(
+[particles]
+file = "three.xyzr"
+density_kg_m3 = 2633
+[contact.ball_ball]
+model = "arrlinear"
+effective_modulus_Pa = 10e6
+rolling_friction = 0.16
+attraction_force_N = 1e-5
+[[stages]]
+name = "before"
+steps = 10
+[[stages]]
+name = "after"
+contact.ball_ball = { attraction_force_N = 0 }
+modify_contacts = { region = { lo = [-0.001, -0.001, -0.001], hi = [0.0015, 0.001, 0.0005] }, set = { friction = 0.4 } }
+steps = 300
+)")
+                                        .string());
+  World world = build_world(sc);
+  ParticleStore& p = world.particles_mut();
+  for (std::size_t i = 0; i < p.size(); ++i) p.flags[i] = fix_translation | fix_rotation;
+  p.velocity[*world.index_of(3)] = {0, 0, -0.01}; // the third comes down onto the second
+  world.cycle(sc.stages[0].steps);
+  ASSERT_EQ(world.ball_ball_contacts().size(), 1u);
+
+  const StageChanges c = apply_stage_changes(world, sc.stages[1], "stages[1]");
+  EXPECT_EQ(c.contacts_modified, 1u); // the one contact, inside the region
+  world.cycle(sc.stages[1].steps);
+
+  const auto contacts = world.ball_ball_contacts();
+  ASSERT_EQ(contacts.size(), 2u);
+  for (const ContactView& v : contacts) {
+    const std::int64_t a = std::min(p.id[v.i], p.id[v.j]), b = std::max(p.id[v.i], p.id[v.j]);
+    const ContactProperties& props = world.property_set(v.properties);
+    if (a == 1 && b == 2) { // old: keeps its adhesion, modified friction
+      EXPECT_EQ(props.attraction_force_N, 1e-5);
+      EXPECT_EQ(props.friction, 0.4);
+    } else { // new (2-3): the stage's defaults, outside the region
+      EXPECT_EQ(a, 2);
+      EXPECT_EQ(b, 3);
+      EXPECT_EQ(props.attraction_force_N, 0.0);
+      EXPECT_EQ(props.friction, 0.0);
+      EXPECT_EQ(props.rolling_friction, 0.16);
+    }
+  }
+}
+
 TEST(Vtk, EmptyWorldWritesValidFiles) {
   const fs::path dir = fs::temp_directory_path() / fmt::format("centridem_vtk_{}", getpid());
   fs::create_directories(dir);
