@@ -1,5 +1,6 @@
 // centridem: command line. Exit codes: 0 success, 2 bad input, 3 the run went
 // unstable, 1 any other failure.
+#include "app/cmd_generate.hpp"
 #include "core/errors.hpp"
 #include "io/scenario.hpp"
 #include "procedures/bench.hpp"
@@ -61,6 +62,8 @@ int main(int argc, char** argv) {
       ->check(CLI::PositiveNumber);
 
   RunCommand run;
+  add_generate_subcommand(app); // runs itself from its callback
+
   auto* cmd_run = app.add_subcommand(
       "run", "run a staged scenario: particles, walls, gravity, stages of cycling "
              "(docs/scenario.md)");
