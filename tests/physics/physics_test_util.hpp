@@ -12,8 +12,8 @@
 #include <numbers>
 #include <optional>
 #include <random>
-#include <vector>
 #include <stdexcept>
+#include <vector>
 
 namespace centridem::phys_test {
 
@@ -53,6 +53,13 @@ inline ContactProperties props(ContactModel model, double E, double friction,
   return p;
 }
 
+// Uniform gravity field with acceleration g [m/s^2].
+inline BodyField gravity(const Vec3& g) {
+  BodyField f;
+  f.gravity_m_s2 = g;
+  return f;
+}
+
 // Index of a particle id, failing loudly if it is gone.
 inline std::size_t idx(const World& w, std::int64_t id) {
   const std::optional<std::size_t> i = w.index_of(id);
@@ -78,9 +85,9 @@ inline void add_lattice(World& w, std::size_t n, std::size_t nx, std::size_t ny,
   const std::size_t first = w.particles().size();
   for (std::size_t k = 0; k < n; ++k) {
     const std::size_t ix = k % nx, iy = (k / nx) % ny, iz = k / (nx * ny);
-    const Vec3 x = origin + Vec3{spacing * static_cast<double>(ix),
-                                 spacing * static_cast<double>(iy),
-                                 spacing * static_cast<double>(iz)};
+    const Vec3 x =
+        origin + Vec3{spacing * static_cast<double>(ix), spacing * static_cast<double>(iy),
+                      spacing * static_cast<double>(iz)};
     const double r = r_min + (r_max - r_min) * u01(rng);
     w.add_particle(x, r, rho, 0, static_cast<std::int64_t>(first + k + 1));
   }

@@ -24,12 +24,13 @@ constexpr double R = 1e-3, rho = paper::density_kg_m3;
 struct Pair {
   World w;
   double kn, F0;
-  Pair(double D0, double damping, bool fix_first, double initial_overlap_over_F0kn) : w([&] {
-      WorldSettings s;
-      s.threads = 1;
-      s.local_damping = damping;
-      return s;
-    }()) {
+  Pair(double D0, double damping, bool fix_first, double initial_overlap_over_F0kn)
+      : w([&] {
+          WorldSettings s;
+          s.threads = 1;
+          s.local_damping = damping;
+          return s;
+        }()) {
     ContactProperties p = paper::ball_ball();
     p.attraction_range_m = D0;
     F0 = p.attraction_force_N;
@@ -52,7 +53,6 @@ TEST(PhysicsAdhesion, RestOverlapIsF0OverKn) {
   for (double start : {0.1, 3.0}) { // start below and above the equilibrium overlap
     Pair p(0.0, 0.7, false, start);
     p.w.cycle(20000);
-    fprintf(stderr, "DBG rest overlap %.10g exp %.10g\n", p.overlap(), p.F0 / p.kn);
     EXPECT_NEAR(p.overlap() / (p.F0 / p.kn), 1.0, 0.01) << "start " << start;
     EXPECT_EQ(p.w.ball_ball_contacts().size(), 1u);
   }
@@ -89,7 +89,6 @@ TEST(PhysicsAdhesion, PullOffForceIsF0) {
     for (int k = 0; k < 400 && -p.overlap() <= D0; ++k) p.w.cycle(100);
     EXPECT_GT(-p.overlap(), D0) << "did not escape the attraction range";
     EXPECT_TRUE(p.w.ball_ball_contacts().empty());
-    fprintf(stderr, "DBG D0 %g P_break/F0 %.10g\n", D0, P_break / p.F0);
     ASSERT_GT(P_break, 0.0) << "never separated up to 1.1 F0";
     EXPECT_NEAR(P_break / p.F0, 1.0, 0.01) << "D0 " << D0;
     EXPECT_GT(P_break / p.F0, 0.999) << "let go below F0";

@@ -60,8 +60,8 @@ TEST(PhysicsContactHistory, PairOrderSwapKeepsShearAndRollingHistory) {
   ASSERT_EQ(before.first_end, 1) << "setup: B should be end 1 before the swap";
   // Not vacuous: a shear force and a rolling moment are stored.
   const double fn = norm(before.force_on_A);
-  const double shear = norm(before.force_on_A - dot(before.force_on_A, Vec3{0, 0, 1}) *
-                                                     Vec3{0, 0, 1});
+  const double shear =
+      norm(before.force_on_A - dot(before.force_on_A, Vec3{0, 0, 1}) * Vec3{0, 0, 1});
   ASSERT_GT(shear, 0.05 * fn);
   // Rolling moment on B: its moment minus the shear lever arm (B is above,
   // its contact arm points down, length R - overlap/2).
@@ -87,9 +87,6 @@ TEST(PhysicsContactHistory, PairOrderSwapKeepsShearAndRollingHistory) {
     EXPECT_LT(rel(after.force_on_A, before.force_on_A, f), 1e-12) << "attempt " << k;
     EXPECT_LT(rel(after.moment_on_A, before.moment_on_A, m), 1e-12) << "attempt " << k;
     EXPECT_LT(rel(after.moment_on_B, before.moment_on_B, m), 1e-12) << "attempt " << k;
-    if (swapped)
-      fprintf(stderr, "DBG swapped at attempt %d: F %g %g %g\n", k, after.force_on_A.x,
-              after.force_on_A.y, after.force_on_A.z);
   }
   EXPECT_TRUE(swapped) << "the pair never swapped ends: the test did not test anything";
 }

@@ -45,7 +45,7 @@ struct Slope {
     const double m = sphere_mass(R, rho);
     const double overlap = ramp_gravity ? 0.0 : m * g * std::cos(theta) / kn_ball_wall(E, R);
     w.add_particle(n * (R - overlap), R, rho, 0, 1);
-    if (!ramp_gravity) w.set_body_field(BodyField{{0, 0, -g}});
+    if (!ramp_gravity) w.set_body_field(gravity({0, 0, -g}));
   }
   static WorldSettings make_settings(double damping) {
     WorldSettings s;
@@ -57,7 +57,7 @@ struct Slope {
   // Gravity grows linearly from 0 to g over `steps` (quasi-static loading).
   void ramp(long steps, int chunks = 200) {
     for (int c = 1; c <= chunks; ++c) {
-      w.set_body_field(BodyField{{0, 0, -g * c / chunks}});
+      w.set_body_field(gravity({0, 0, -g * c / chunks}));
       w.cycle(steps / chunks);
     }
   }
@@ -113,7 +113,6 @@ TEST(PhysicsFriction, SlopeSlidingAcceleration) {
   const double v2 = s.speed_down(), t2 = s.w.time();
   const double a = (v2 - v1) / (t2 - t1);
   const double expected = g * (std::sin(theta) - mu * std::cos(theta));
-  fprintf(stderr, "DBG slide a %.10g exp %.10g\n", a, expected);
   EXPECT_NEAR(a / expected, 1.0, 0.02) << "a " << a << " expected " << expected;
   // Rolling blocked: spin stays tiny compared with rolling (v/R).
   EXPECT_LT(norm(s.w.particles().spin[0]) * R, 0.01 * v2);
@@ -132,7 +131,6 @@ TEST(PhysicsFriction, SlopeRollingAcceleration) {
     const double v2 = s.speed_down(), t2 = s.w.time();
     const double a = (v2 - v1) / (t2 - t1);
     const double expected = 5.0 / 7.0 * g * std::sin(theta);
-    fprintf(stderr, "DBG roll a %.10g exp %.10g\n", a, expected);
     EXPECT_NEAR(a / expected, 1.0, 0.01) << "model " << to_string(model) << " a " << a;
     // rolls: contact-point speed ~ 0, i.e. spin x R = v
     const double roll_speed = norm(s.w.particles().spin[0]) * R;
@@ -161,10 +159,11 @@ TEST(PhysicsFriction, HorizontalPullStickSlip) {
     }
     s->w.cycle(10000);
     const double u = s->w.particles().position[idx(s->w, 1)].x;
-    if (ratio < 1)
+    if (ratio < 1) {
       EXPECT_NEAR(u / (P / ks), 1.0, 0.01) << "sticking: elastic displacement P/ks";
-    else
+    } else {
       EXPECT_GT(u, 1e3 * P / ks) << "should slide";
+    }
   }
   auto s = make(0.0);
   const double P = 1.5 * mu * N;
@@ -174,7 +173,6 @@ TEST(PhysicsFriction, HorizontalPullStickSlip) {
   s->w.cycle(10000);
   const double v2 = s->w.particles().velocity[0].x, t2 = s->w.time();
   const double a = (v2 - v1) / (t2 - t1);
-  fprintf(stderr, "DBG pull a %.10g exp %.10g\n", a, (P - mu * N) / m);
   EXPECT_NEAR(a / ((P - mu * N) / m), 1.0, 0.01);
 }
 

@@ -24,7 +24,7 @@ TEST(PhysicsLocalDamping, FreeFallAcceleratesAtOneMinusAlphaG) {
     World w(s);
     w.add_particle({0, 0, 0}, 0.01, 2650, 0, 1);
     w.particles_mut().velocity[0] = {0.2, 0, 0};
-    w.set_body_field(BodyField{{0, 0, -g}});
+    w.set_body_field(gravity({0, 0, -g}));
     w.cycle(10);
     const double v1 = w.particles().velocity[0].z, t1 = w.time();
     w.cycle(1000);

@@ -19,7 +19,7 @@ namespace {
 using namespace phys_test;
 
 struct ImpactResult {
-  double duration_s = 0;   // contact duration (linear interpolation of the zero crossings)
+  double duration_s = 0;    // contact duration (linear interpolation of the zero crossings)
   double rebound_speed = 0; // |relative normal velocity| after separation
   double impact_speed = 0;
 };
@@ -74,7 +74,6 @@ ImpactResult run_impact(const ImpactSetup& s) {
   r.duration_s = t_out - t_in;
   const Vec3 vrel = w.particles().velocity[idx(w, 2)] - w.particles().velocity[idx(w, 1)];
   r.rebound_speed = vrel.x; // separating: positive
-  fprintf(stderr, "DBG beta %g dur %.8g/%.8g e %.8g\n", s.beta, r.duration_s, T, r.rebound_speed / s.v0);
   EXPECT_GT(t_in, 0.0);
   EXPECT_GT(t_out, t_in);
   return r;

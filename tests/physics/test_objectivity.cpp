@@ -38,12 +38,13 @@ struct State {
 
 struct Pair {
   World w;
-  Pair() : w([] {
-      WorldSettings s;
-      s.threads = 1;
-      s.timestep_s = dt;
-      return s;
-    }()) {
+  Pair()
+      : w([] {
+          WorldSettings s;
+          s.threads = 1;
+          s.timestep_s = dt;
+          return s;
+        }()) {
     w.set_ball_ball_defaults(props(ContactModel::rrlinear, E, 1.0, 1.0));
     const double h = R - 0.5e-3 * R; // overlap 1e-3 R
     w.add_particle({-h, 0, 0}, R, rho, 0, 1);
@@ -100,7 +101,6 @@ TEST(PhysicsObjectivity, RigidRotationCreatesNoTangentialForce) {
   const Vec3 n = p.centre_line() / norm(p.centre_line());
   const double fn = dot(after.force_on_2, n);
   const Vec3 ft = after.force_on_2 - fn * n;
-  fprintf(stderr, "DBG ft/fn %g m %g\n", norm(ft) / fn, norm(after.moment_2) / (fn * R));
   EXPECT_NEAR(n.y, 1.0, 1e-9) << "did not turn a quarter";
   EXPECT_LT(norm(ft), 1e-9 * fn);
   EXPECT_LT(norm(after.moment_1) + norm(after.moment_2), 1e-9 * fn * R);
@@ -127,10 +127,6 @@ TEST(PhysicsObjectivity, StoredShearAndRollingTurnWithThePair) {
   p.rotate(0.5 * pi, 5e-4);
   const State after = p.measure();
   const double tol = 1e-3;
-  fprintf(stderr, "DBG f %g m1 %g m2 %g\n",
-          rel(after.force_on_2, rot_z(before.force_on_2, 0.5 * pi), norm(ft)),
-          rel(after.moment_1, rot_z(before.moment_1, 0.5 * pi), norm(before.moment_1)),
-          rel(after.moment_2, rot_z(before.moment_2, 0.5 * pi), norm(before.moment_2)));
   EXPECT_LT(rel(after.force_on_2, rot_z(before.force_on_2, 0.5 * pi), norm(ft)), tol);
   EXPECT_LT(rel(after.moment_1, rot_z(before.moment_1, 0.5 * pi), norm(before.moment_1)), tol);
   EXPECT_LT(rel(after.moment_2, rot_z(before.moment_2, 0.5 * pi), norm(before.moment_2)), tol);

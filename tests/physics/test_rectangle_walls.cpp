@@ -81,9 +81,8 @@ TEST(PhysicsRectangleWalls, FaceEdgeCornerNormalsAndOverlap) {
     const Vec3 f = wall_force(pl, c.x, &contacts);
     const Vec3 e = expected_force(c.x, c.q);
     EXPECT_EQ(contacts, 1u) << c.name;
-    EXPECT_LT(rel(f, e, norm(e)), 1e-9)
-        << c.name << ": force " << f.x << " " << f.y << " " << f.z << " expected " << e.x << " "
-        << e.y << " " << e.z;
+    EXPECT_LT(rel(f, e, norm(e)), 1e-9) << c.name << ": force " << f.x << " " << f.y << " " << f.z
+                                        << " expected " << e.x << " " << e.y << " " << e.z;
   }
 }
 
@@ -93,8 +92,7 @@ TEST(PhysicsRectangleWalls, NoContactBeyondTheEdges) {
   const Plate pl;
   const double d = 1.001 * R;
   const Vec3 xs[] = {pl.at(pl.hu, 0, 0) + d * unit(pl.u + pl.n),
-                     pl.at(pl.hu, pl.hv, 0) + d * unit(pl.u + pl.v - pl.n),
-                     pl.at(0, -pl.hv - d, 0),
+                     pl.at(pl.hu, pl.hv, 0) + d * unit(pl.u + pl.v - pl.n), pl.at(0, -pl.hv - d, 0),
                      // above the face's plane extension, outside the plate:
                      // a plane would touch it, the rectangle must not
                      pl.at(pl.hu + 1.2 * R, 0, 0.5 * R)};

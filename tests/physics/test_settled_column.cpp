@@ -40,18 +40,19 @@ TEST(PhysicsSettledColumn, FloorCarriesTheWeight) {
   const double spacing = L / 5.0; // 5 x 5 columns, 12 layers
   add_lattice(w, 300, 5, 5, spacing, 0.8 * r, 1.2 * r, 2650,
               {spacing / 2, spacing / 2, spacing / 2}, 0.05, false);
-  w.set_body_field(BodyField{{0, 0, -g}});
+  w.set_body_field(gravity({0, 0, -g}));
   double weight = 0;
   for (double m : w.particles().mass) weight += m * g;
   const long steps = w.cycle_until_equilibrium(1e-5, 400000, 200);
   const double ratio = w.mean_unbalanced_force_ratio();
   const Wall& fl = w.walls()[kfloor];
-  fprintf(stderr, "DBG steps %ld ratio %g floor %.10g weight %.10g contacts %zu\n", steps, ratio,
-          -fl.force.z, weight, w.measure().ball_ball_contacts);
   ASSERT_LT(ratio, 1e-5) << "did not settle in " << steps << " steps";
   EXPECT_NEAR(-fl.force.z / weight, 1.0, 0.005);
-  for (const Wall& wl : w.walls())
-    if (wl.name != "floor") EXPECT_LT(std::abs(wl.force.z), 1e-12 * weight) << wl.name;
+  for (const Wall& wl : w.walls()) {
+    if (wl.name != "floor") {
+      EXPECT_LT(std::abs(wl.force.z), 1e-12 * weight) << wl.name;
+    }
+  }
   // It is a column: several layers, all balls inside the box, many contacts.
   EXPECT_GT(w.measure().ball_ball_contacts, 500u);
   for (const Vec3& x : w.particles().position) {
