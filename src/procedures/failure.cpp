@@ -70,8 +70,7 @@ void validate(const FailureCriteria& c, const std::string& where) {
           "must be > 0 (x sqrt(g d50))");
   require(c.moving_speed_m_s >= 0, k("moving_speed_m_s"), c.moving_speed_m_s,
           "must be >= 0 [m/s] (0: use moving_speed_factor)");
-  require(c.consecutive_checks >= 1, k("consecutive_checks"), c.consecutive_checks,
-          "must be >= 1");
+  require(c.consecutive_checks >= 1, k("consecutive_checks"), c.consecutive_checks, "must be >= 1");
   require(c.equilibrium_ratio > 0, k("equilibrium_ratio"), c.equilibrium_ratio, "must be > 0");
   require(c.growth_tolerance >= 0, k("growth_tolerance"), c.growth_tolerance, "must be >= 0");
   require(c.slip_surface_bin_d50 > 0, k("slip_surface_bin_d50"), c.slip_surface_bin_d50,
@@ -101,7 +100,7 @@ SlidingMass find_sliding_mass(const World& world, const SlidingMassCriteria& c, 
   const ParticleStore& P = world.particles();
   SlidingMass out;
   out.threshold_m = c.displacement_threshold_m > 0 ? c.displacement_threshold_m
-                                                    : c.displacement_threshold_d50 * d50_m;
+                                                   : c.displacement_threshold_d50 * d50_m;
   const double t2 = out.threshold_m * out.threshold_m;
   std::vector<std::uint32_t> cand;
   double r_max = 0.0;
@@ -234,7 +233,10 @@ SlopeState FailureMonitor::update(const World& world, double time_s) {
 
   const int need = criteria_.consecutive_checks;
   if (moving) {
-    if (moving_streak_ == 0) streak_start_time_ = time_s;
+    if (moving_streak_ == 0) { // a candidate onset: where is this mass now?
+      streak_start_time_ = time_s;
+      streak_start_zone_ = start_zone(world, mass);
+    }
     ++moving_streak_;
   } else {
     moving_streak_ = 0;
@@ -246,7 +248,7 @@ SlopeState FailureMonitor::update(const World& world, double time_s) {
   if (r.state != SlopeState::failed && moving_streak_ >= need) {
     r.state = SlopeState::failed;
     r.onset_time_s = streak_start_time_;
-    r.start_zone = start_zone(world, mass);
+    r.start_zone = streak_start_zone_;
   } else if (r.state != SlopeState::failed) {
     r.state = stable_streak_ >= need ? SlopeState::stable : SlopeState::undecided;
   }
@@ -258,8 +260,7 @@ SlopeState FailureMonitor::update(const World& world, double time_s) {
   return r.state;
 }
 
-void FailureMonitor::describe_mass(const World& world, const SlidingMass& mass,
-                                   double mean_speed) {
+void FailureMonitor::describe_mass(const World& world, const SlidingMass& mass, double mean_speed) {
   const ParticleStore& P = world.particles();
   FailureReport& r = report_;
   const SlopeGeometry& g = geometry_;
@@ -267,9 +268,9 @@ void FailureMonitor::describe_mass(const World& world, const SlidingMass& mass,
   r.sliding_mass = true;
   r.particles = mass.size();
   r.volume_m3 = mass.volume_m3;
-  r.particle_share =
-      r.slope_particles > 0 ? static_cast<double>(mass.size()) / static_cast<double>(r.slope_particles)
-                            : 0.0;
+  r.particle_share = r.slope_particles > 0
+                         ? static_cast<double>(mass.size()) / static_cast<double>(r.slope_particles)
+                         : 0.0;
   r.volume_share = r.slope_volume_m3 > 0 ? mass.volume_m3 / r.slope_volume_m3 : 0.0;
   r.mean_speed_m_s = mean_speed;
 
@@ -321,9 +322,10 @@ ZoneId FailureMonitor::start_zone(const World& world, const SlidingMass& mass) c
     order.emplace_back(it == first_check_above_.end() ? report_.checks : it->second, i);
   }
   std::sort(order.begin(), order.end());
-  std::size_t take = std::max<std::size_t>(
-      std::min<std::size_t>(10, order.size()),
-      static_cast<std::size_t>(std::ceil(criteria_.start_share * static_cast<double>(order.size()))));
+  std::size_t take =
+      std::max<std::size_t>(std::min<std::size_t>(10, order.size()),
+                            static_cast<std::size_t>(std::ceil(criteria_.start_share *
+                                                               static_cast<double>(order.size()))));
   take = std::min(take, order.size());
   while (take < order.size() && order[take].first == order[take - 1].first) ++take; // ties
   std::map<std::pair<int, int>, std::size_t> votes; // (zone, bench) -> count

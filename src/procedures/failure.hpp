@@ -116,8 +116,8 @@ struct FailureReport {
   SlopeState state = SlopeState::undecided;
   bool settled = false; // at rest (ratio below equilibrium_ratio) at the last checks
   int checks = 0;
-  double time_s = 0.0;                  // trial time of the last check
-  double unbalanced_force_ratio = 0.0;  // at the last check
+  double time_s = 0.0;                 // trial time of the last check
+  double unbalanced_force_ratio = 0.0; // at the last check
   // Scales the thresholds were derived from (fixed at the first check).
   double d50_m = 0.0;
   double gravity_m_s2 = 0.0;
@@ -144,9 +144,9 @@ struct FailureReport {
   std::vector<int> source_benches;  // benches (0 = toe floor) giving >= bench_share of the mass
   std::vector<std::size_t> particles_from_bench; // [0..N]: mass particles by original column
   std::vector<SectionPoint> slip_surface;        // lowest original centre z per x bin
-  double front_x_m = 0.0;      // largest current x of the mass's centres
-  double runout_m = 0.0;       // max(0, front_x - toe_x)
-  double runout_model_m = 0.0; // runout_m / s
+  double front_x_m = 0.0;                        // largest current x of the mass's centres
+  double runout_m = 0.0;                         // max(0, front_x - toe_x)
+  double runout_model_m = 0.0;                   // runout_m / s
 
   std::size_t largest_group_particles = 0; // diagnostics: largest group, significant or not
   std::size_t above_threshold = 0;         // diagnostics: all particles above the threshold
@@ -194,6 +194,7 @@ private:
   std::unordered_map<std::int64_t, int> first_check_above_; // particle id -> check index
   int moving_streak_ = 0, stable_streak_ = 0, settled_streak_ = 0;
   std::optional<double> streak_start_time_;
+  std::optional<ZoneId> streak_start_zone_;
   std::size_t previous_group_ = 0;
 };
 

@@ -137,7 +137,8 @@ SlopeGeometry::SlopeGeometry(BenchedSlope slope) : slope_(std::move(slope)) {
     const double h = bench.height_m * s;
     const double x1 = x + face_run(h, bench.face_angle_deg);
     const double z1 = z - h;
-    segments_.push_back({x, z, x1, z1, {b == n ? SlopeZone::upper_face : SlopeZone::lower_face, b}});
+    segments_.push_back(
+        {x, z, x1, z1, {b == n ? SlopeZone::upper_face : SlopeZone::lower_face, b}});
     outline_.push_back({x1, z1});
     face_foot_x_[static_cast<std::size_t>(b - 1)] = x1;
     x = x1, z = z1;

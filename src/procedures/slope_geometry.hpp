@@ -45,12 +45,12 @@ struct Bench {
 // are the paper's (REFERENCE.md); `benches` has no default (see the two
 // factory functions for the paper's slopes).
 struct BenchedSlope {
-  double total_height_m = 0.18;      // `total_height_m`: model height, floor to crest [m]
-  double foundation_height_m = 0.03; // `foundation_height_m`: soil below the toe [m]
-  std::vector<Bench> benches;        // `benches`: from the toe upwards
-  double breadth_m = 0.20;           // `breadth_m`: across the section (y) [m]
-  double crest_to_wall_m = 0.135;    // `crest_to_wall_m`: back wall to crest edge [m]
-  double length_m = 0.301;           // `length_m`: back wall to end of model (half chamber) [m]
+  double total_height_m = 0.18;         // `total_height_m`: model height, floor to crest [m]
+  double foundation_height_m = 0.03;    // `foundation_height_m`: soil below the toe [m]
+  std::vector<Bench> benches;           // `benches`: from the toe upwards
+  double breadth_m = 0.20;              // `breadth_m`: across the section (y) [m]
+  double crest_to_wall_m = 0.135;       // `crest_to_wall_m`: back wall to crest edge [m]
+  double length_m = 0.301;              // `length_m`: back wall to end of model (half chamber) [m]
   double size_reduction_factor = 0.063; // `size_reduction_factor`: DEM = model x s [-]
 
   // The paper's right slope: first bench 3.75 cm, then 11.25 cm; 3 cm wide

@@ -1,11 +1,10 @@
 // Failure detection (src/procedures/failure.hpp): the sliding mass on
 // hand-made displacement fields, the monitor's decisions on a scripted
 // sequence of checks, and two small DEM slopes cut from one settled
-// foundation that differ only in their friction: a gentle frictional slope
-// must be reported stable with no sliding mass, the frictionless one failed
-// with a slide that starts at the face and runs out beyond the toe. The two
-// guard each other: a monitor that always said "failed" (or "stable") fails
-// one of them.
+// foundation: a gentle (20-degree) frictional slope must be reported stable
+// with no sliding mass, a 45-degree frictionless one failed with a slide that
+// starts at the face and runs out beyond the toe. The two guard each other: a
+// monitor that always said "failed" (or "stable") fails one of them.
 #include "core/errors.hpp"
 #include "core/world.hpp"
 #include "procedures/failure.hpp"
@@ -318,9 +317,9 @@ TEST(FailureMonitor, NeedsASignificantMassMovingOnConsecutiveChecks) {
 
 // --------------------------------------------- small DEM slopes, cycled --
 //
-// A one-bench slope 4 mm high (DEM) with a 20-degree face, 18 mm long and
-// 5 mm across, on 1 mm of foundation, under 40 g at s = 0.063
-// (6,226 m/s^2). About 2,200 particles of radius 0.2-0.4 mm (d50 ~ 0.68 mm)
+// A one-bench slope 4 mm high (DEM), 18 mm long and 5 mm across, on 1 mm of
+// foundation, crest 3 mm from the back wall, under 40 g at s = 0.063
+// (6,226 m/s^2). About 2,300 particles of radius 0.2-0.4 mm (d50 ~ 0.68 mm)
 // with the paper's density, stiffness (E* = 300 MPa, kappa* = 1.5) and
 // local damping (0.7); walls of friction 0.2 (the paper's) except the two
 // side walls, frictionless so that a slice 7 grains across acts as part of a
@@ -329,13 +328,17 @@ TEST(FailureMonitor, NeedsASignificantMassMovingOnConsecutiveChecks) {
 // mu_r = 0.05: dense and quick to settle); each trial then gives every
 // ball-ball contact, old and new, its own friction, cuts the slope (which
 // also levels the crest at 5 mm), resets displacements and cycles with the
-// monitor checking every 200 steps. So the two trials differ only in the
-// soil's friction.
+// monitor checking every 200 steps.
+//
+// The frictionless trial uses a 45-degree face: a frictionless 20-degree
+// face fails too, but slowly, as a whole-body spreading in which (in some
+// packings) the soil behind the crest subsides first, so that its start
+// zone is honestly "crest"; the steeper face slides from the face.
 
 constexpr double s_red = 0.063, g_level = 40;
 constexpr double L = 18e-3, B = 5e-3, H = 5e-3, H_toe = 1e-3; // DEM [m]
 
-BenchedSlope gentle_slope() {
+BenchedSlope slope_with_face(double face_angle_deg) {
   BenchedSlope b;
   b.size_reduction_factor = s_red;
   b.total_height_m = H / s_red;
@@ -343,7 +346,7 @@ BenchedSlope gentle_slope() {
   b.breadth_m = B / s_red;
   b.length_m = L / s_red;
   b.crest_to_wall_m = 3e-3 / s_red;
-  b.benches = {Bench{(H - H_toe) / s_red, std::nullopt, 20.0}};
+  b.benches = {Bench{(H - H_toe) / s_red, std::nullopt, face_angle_deg}};
   return b;
 }
 
@@ -355,9 +358,14 @@ ContactProperties soil(double friction, double rolling_friction) {
   return p;
 }
 
+struct Foundation {
+  World world;
+  double top_m = 0; // the lowest of the highest centres in 2 mm columns along x
+};
+
 // The settled foundation, made once for the tests of this file.
-const World& settled_foundation() {
-  static const World settled = [] {
+const Foundation& settled_foundation() {
+  static const Foundation settled = [] {
     WorldSettings ws;
     ws.threads = 1;
     ws.local_damping = paper::local_damping;
@@ -401,7 +409,7 @@ const World& settled_foundation() {
     std::printf("foundation: %zu particles, %ld steps, dt %.3g s, ratio %.2g, top >= %.2f mm\n",
                 w.particles().size(), steps, w.timestep(), w.mean_unbalanced_force_ratio(),
                 top * 1e3);
-    return w;
+    return Foundation{w, top};
   }();
   return settled;
 }
@@ -414,16 +422,21 @@ struct Trial {
 };
 
 // One trial: checks every 200 steps until the monitor decides; after a
-// failure, cycles on (at most extra_steps) so the slide runs out.
-Trial run_trial(double friction, double rolling_friction, long max_steps, long extra_steps) {
-  World w = settled_foundation();
+// failure, cycles on until the slide's front has passed the toe, it has come
+// to rest, or extra_steps.
+Trial run_trial(double face_angle_deg, double friction, double rolling_friction, long max_steps,
+                long extra_steps) {
+  const Foundation& f = settled_foundation();
+  // The soil reaches above the crest everywhere (the cut levels it).
+  EXPECT_GT(f.top_m, H + 0.2e-3);
+  World w = f.world;
   w.set_ball_ball_defaults(soil(friction, rolling_friction));
   w.modify_ball_ball_contacts([](std::size_t, std::size_t) { return true; },
                               [&](ContactProperties& p) {
                                 p.friction = friction;
                                 p.rolling_friction = rolling_friction;
                               });
-  const SlopeGeometry g(gentle_slope());
+  const SlopeGeometry g(slope_with_face(face_angle_deg));
   g.excavate(w);
   w.reset_displacements();
   Trial t;
@@ -436,7 +449,9 @@ Trial run_trial(double friction, double rolling_friction, long max_steps, long e
     mon.update(w, w.time() - t0);
   }
   t.state_at_decision = mon.state();
-  for (long extra = 0; mon.failed() && !mon.finished() && extra < extra_steps; extra += 200) {
+  for (long extra = 0;
+       mon.failed() && !mon.finished() && mon.report().runout_m <= 0 && extra < extra_steps;
+       extra += 200) {
     w.cycle(200);
     mon.update(w, w.time() - t0);
   }
@@ -449,7 +464,7 @@ Trial run_trial(double friction, double rolling_friction, long max_steps, long e
 
 // (a) 20-degree face, mu = 0.5, mu_r = 0.16: stable, no sliding mass.
 TEST(FailureMonitor, GentleFrictionalSlopeIsStable) {
-  const Trial t = run_trial(0.5, 0.16, 40000, 0);
+  const Trial t = run_trial(20, 0.5, 0.16, 40000, 0);
   EXPECT_GT(t.slope_particles, 1000u);
   EXPECT_EQ(t.report.state, SlopeState::stable);
   EXPECT_FALSE(t.report.sliding_mass);
@@ -464,10 +479,10 @@ TEST(FailureMonitor, GentleFrictionalSlopeIsStable) {
   for (const FailureCheck& c : t.history) EXPECT_FALSE(c.significant && c.moving) << c.time_s;
 }
 
-// (b) The same slope with mu = mu_r = 0: failed, a slide that starts at the
-// face and runs out beyond the toe.
+// (b) A 45-degree face with mu = mu_r = 0: failed, a slide that starts at
+// the face and runs out beyond the toe.
 TEST(FailureMonitor, FrictionlessSlopeFails) {
-  const Trial t = run_trial(0.0, 0.0, 40000, 10000);
+  const Trial t = run_trial(45, 0.0, 0.0, 40000, 40000);
   const FailureReport& r = t.report;
   ASSERT_EQ(t.state_at_decision, SlopeState::failed);
   EXPECT_EQ(r.state, SlopeState::failed);
@@ -485,7 +500,7 @@ TEST(FailureMonitor, FrictionlessSlopeFails) {
   EXPECT_GT(r.max_displacement_m, r.displacement_threshold_m);
   // The slip surface lies within the soil, under the original surface.
   ASSERT_FALSE(r.slip_surface.empty());
-  const SlopeGeometry g(gentle_slope());
+  const SlopeGeometry g(slope_with_face(45));
   for (const SectionPoint& p : r.slip_surface) {
     EXPECT_GE(p.z, 0.0);
     EXPECT_LE(p.z, g.z_surface(p.x) + 1e-9);

@@ -61,7 +61,7 @@ TEST(SlopeGeometry, LowerFirstBenchKeyPoints) {
   // Soil and excavation (centres).
   const double yc = 0.5 * g.breadth();
   EXPECT_TRUE(g.is_soil({0.5 * x_crest, yc, 0.17 * s}));
-  EXPECT_FALSE(g.is_soil({0.5 * x_crest, yc, 0.19 * s}));   // above the crest
+  EXPECT_FALSE(g.is_soil({0.5 * x_crest, yc, 0.19 * s}));    // above the crest
   EXPECT_FALSE(g.is_soil({0.5 * x_crest, -1e-6, 0.17 * s})); // outside the breadth
   EXPECT_TRUE(g.is_soil({0.5 * (x_bench + x_bench_edge), yc, 0.06 * s}));
   EXPECT_TRUE(g.excavated({0.5 * (x_bench + x_bench_edge), yc, 0.07 * s}));
@@ -212,8 +212,7 @@ TEST(SlopeGeometry, ValidationNamesTheKey) {
             "slope.benches[0].width_m");
   EXPECT_EQ(with([](BenchedSlope& b) { b.benches[0].width_m.reset(); }),
             "slope.benches[0].width_m");
-  EXPECT_EQ(with([](BenchedSlope& b) { b.benches[1].width_m = 0.1; }),
-            "slope.benches[1].width_m");
+  EXPECT_EQ(with([](BenchedSlope& b) { b.benches[1].width_m = 0.1; }), "slope.benches[1].width_m");
   EXPECT_EQ(with([](BenchedSlope& b) { b.benches[1].width_m = 0.135; }), ""); // = crest plateau
   // Heights must add up to the slope height (15 cm).
   EXPECT_EQ(with([](BenchedSlope& b) { b.benches[1].height_m = 0.1; }), "slope.benches");
