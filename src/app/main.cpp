@@ -1,6 +1,7 @@
 // centridem: command line. Exit codes: 0 success, 2 bad input, 3 the run went
 // unstable, 1 any other failure.
 #include "app/cmd_generate.hpp"
+#include "app/cmd_shear.hpp"
 #include "core/errors.hpp"
 #include "io/scenario.hpp"
 #include "procedures/bench.hpp"
@@ -63,6 +64,7 @@ int main(int argc, char** argv) {
 
   RunCommand run;
   add_generate_subcommand(app); // runs itself from its callback
+  add_shear_subcommand(app);    // likewise
 
   auto* cmd_run = app.add_subcommand(
       "run", "run a staged scenario: particles, walls, gravity, stages of cycling "

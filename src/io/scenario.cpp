@@ -1,4 +1,5 @@
 #include "io/scenario.hpp"
+#include "io/toml_read.hpp"
 
 #include "core/errors.hpp"
 #include "io/specimen_config.hpp"
@@ -116,36 +117,17 @@ Wall WallSpec::make() const {
 
 namespace {
 
-using Keys = std::vector<std::string_view>;
-
-std::string quote(std::string_view s) {
-  std::string out = "\"";
-  for (char c : s) {
-    switch (c) {
-    case '"':
-      out += "\\\"";
-      break;
-    case '\\':
-      out += "\\\\";
-      break;
-    case '\n':
-      out += "\\n";
-      break;
-    case '\t':
-      out += "\\t";
-      break;
-    case '\r':
-      out += "\\r";
-      break;
-    default:
-      if (static_cast<unsigned char>(c) < 0x20)
-        out += fmt::format("\\u{:04X}", static_cast<unsigned>(c));
-      else
-        out += c;
-    }
-  }
-  return out + "\"";
-}
+using Keys = tomlread::Keys;
+using tomlread::as_bool;
+using tomlread::as_number;
+using tomlread::as_string;
+using tomlread::as_vec3;
+using tomlread::fail;
+using tomlread::join;
+using tomlread::missing;
+using tomlread::quote;
+using tomlread::show;
+using tomlread::where;
 
 // A TOML float that reads back exactly (shortest round-trip, always with a
 // '.' or an exponent so that it stays a float).
@@ -161,56 +143,8 @@ std::string vec(const Vec3& v) {
   return fmt::format("[{}, {}, {}]", num(v.x), num(v.y), num(v.z));
 }
 
-std::string join(const Keys& keys) {
-  std::string out;
-  for (std::string_view k : keys) out += (out.empty() ? "" : ", ") + std::string(k);
-  return out;
-}
-
-std::string show(const toml::node& n) {
-  switch (n.type()) {
-  case toml::node_type::string:
-    return quote(n.as_string()->get());
-  case toml::node_type::integer:
-    return fmt::format("{}", n.as_integer()->get());
-  case toml::node_type::floating_point:
-    return fmt::format("{}", n.as_floating_point()->get());
-  case toml::node_type::boolean:
-    return n.as_boolean()->get() ? "true" : "false";
-  case toml::node_type::array: {
-    const toml::array& a = *n.as_array();
-    std::string out = "[";
-    for (std::size_t i = 0; i < a.size() && i < 8; ++i) out += (i ? ", " : "") + show(a[i]);
-    return out + (a.size() > 8 ? ", ...]" : "]");
-  }
-  case toml::node_type::table: {
-    std::string out = "{";
-    for (auto&& [k, v] : *n.as_table())
-      out += (out.size() > 1 ? ", " : " ") + std::string(k.str()) + " = " + show(v);
-    return out + " }";
-  }
-  default:
-    return "(a date/time)";
-  }
-}
-
-std::string where(const toml::node& n) {
-  const toml::source_region& s = n.source();
-  if (s.begin.line == 0) return "";
-  return fmt::format(" (at {}:{}:{})", s.path ? *s.path : std::string("<scenario>"), s.begin.line,
-                     s.begin.column);
-}
-
 std::string path_of(const std::string& table, std::string_view key) {
   return table.empty() ? std::string(key) : table + "." + std::string(key);
-}
-
-[[noreturn]] void fail(const std::string& key, const toml::node& n, const std::string& allowed) {
-  throw InputError(key, show(n), allowed + where(n));
-}
-
-[[noreturn]] void missing(const std::string& key, const std::string& allowed) {
-  throw InputError(key, "(missing)", "required: " + allowed);
 }
 
 // Where a key lives when it is not in this table: helps with a key written
@@ -243,39 +177,18 @@ const std::map<std::string_view, std::string_view>& key_homes() {
 }
 
 void check_keys(const toml::table& t, const std::string& path, const Keys& allowed) {
-  for (auto&& [k, v] : t) {
-    const std::string_view key = k.str();
-    if (std::find(allowed.begin(), allowed.end(), key) != allowed.end()) continue;
-    std::string msg = "unknown key";
-    if (!path.empty()) msg += " in " + path;
-    const std::string guess = did_you_mean(key, allowed);
-    if (!guess.empty()) {
-      msg += " (did you mean \"" + guess + "\"?)";
-    } else if (auto it = key_homes().find(key); it != key_homes().end()) {
-      msg += fmt::format(" (\"{}\" is a key of {}; keys written after a [table] header belong "
-                         "to that table: put them before it)",
-                         key, it->second);
-    }
-    msg += "; allowed keys: " + join(allowed);
-    fail(path_of(path, key), v, msg);
-  }
+  tomlread::check_keys(t, path, allowed, [](std::string_view key) -> std::string {
+    const auto it = key_homes().find(key);
+    if (it == key_homes().end()) return "";
+    return fmt::format(" (\"{}\" is a key of {}; keys written after a [table] header belong "
+                       "to that table: put them before it)",
+                       key, it->second);
+  });
 }
 
 const toml::table& as_table(const toml::node& n, const std::string& key, const char* what) {
   if (const toml::table* t = n.as_table()) return *t;
   fail(key, n, std::string("expected a table: ") + what);
-}
-
-double as_number(const toml::node& n, const std::string& key, const std::string& allowed) {
-  double v = 0;
-  if (auto i = n.as_integer())
-    v = static_cast<double>(i->get());
-  else if (auto f = n.as_floating_point())
-    v = f->get();
-  else
-    fail(key, n, "expected a number; " + allowed);
-  if (!std::isfinite(v)) fail(key, n, "must be finite; " + allowed);
-  return v;
 }
 
 long as_integer(const toml::node& n, const std::string& key, const std::string& allowed) {
@@ -285,25 +198,6 @@ long as_integer(const toml::node& n, const std::string& key, const std::string& 
     if (std::isfinite(v) && v == std::floor(v) && std::abs(v) < 9e15) return static_cast<long>(v);
   }
   fail(key, n, "expected a whole number; " + allowed);
-}
-
-bool as_bool(const toml::node& n, const std::string& key) {
-  if (auto b = n.as_boolean()) return b->get();
-  fail(key, n, "expected true or false");
-}
-
-std::string as_string(const toml::node& n, const std::string& key, const std::string& allowed) {
-  if (auto s = n.as_string()) return s->get();
-  fail(key, n, "expected a string; " + allowed);
-}
-
-Vec3 as_vec3(const toml::node& n, const std::string& key, const std::string& allowed) {
-  const toml::array* a = n.as_array();
-  if (!a || a->size() != 3) fail(key, n, "expected an array of 3 numbers [x, y, z]; " + allowed);
-  Vec3 v;
-  for (int c = 0; c < 3; ++c)
-    v[c] = as_number((*a)[static_cast<std::size_t>(c)], fmt::format("{}[{}]", key, c), allowed);
-  return v;
 }
 
 std::string one_of(const Keys& names) {

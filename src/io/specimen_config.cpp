@@ -1,4 +1,5 @@
 #include "io/specimen_config.hpp"
+#include "io/toml_read.hpp"
 
 #include "core/errors.hpp"
 #include "io/scenario.hpp" // did_you_mean (read-only use)
@@ -146,7 +147,16 @@ SieveTable read_sieve_csv(const std::string& path) {
 
 namespace {
 
-using Keys = std::vector<std::string_view>;
+using Keys = tomlread::Keys;
+using tomlread::as_bool;
+using tomlread::as_number;
+using tomlread::as_string;
+using tomlread::as_vec3;
+using tomlread::check_keys;
+using tomlread::fail;
+using tomlread::join;
+using tomlread::missing;
+using tomlread::show;
 
 const Keys kSpecimenKeys = {"file", "gradation", "cutoff_m", "porosity", "density_kg_m3", "group",
                             "seed", "brick",     "region",   "periodic", "relax"};
@@ -172,81 +182,9 @@ const Keys kContactKeys = {"model",
                            "dashpot_mode",
                            "limits_use_net_force"};
 
-std::string join(const Keys& keys) {
-  std::string out;
-  for (std::string_view k : keys) out += (out.empty() ? "" : ", ") + std::string(k);
-  return out;
-}
-
-std::string show(const toml::node& n) {
-  switch (n.type()) {
-  case toml::node_type::string:
-    return "\"" + std::string(n.as_string()->get()) + "\"";
-  case toml::node_type::integer:
-    return fmt::format("{}", n.as_integer()->get());
-  case toml::node_type::floating_point:
-    return fmt::format("{}", n.as_floating_point()->get());
-  case toml::node_type::boolean:
-    return n.as_boolean()->get() ? "true" : "false";
-  case toml::node_type::array: {
-    const toml::array& a = *n.as_array();
-    std::string out = "[";
-    for (std::size_t i = 0; i < a.size() && i < 8; ++i) out += (i ? ", " : "") + show(a[i]);
-    return out + (a.size() > 8 ? ", ...]" : "]");
-  }
-  case toml::node_type::table: {
-    std::string out = "{";
-    for (auto&& [k, v] : *n.as_table())
-      out += (out.size() > 1 ? ", " : " ") + std::string(k.str()) + " = " + show(v);
-    return out + " }";
-  }
-  default:
-    return "(a date/time)";
-  }
-}
-
-std::string where(const toml::node& n) {
-  const toml::source_region& s = n.source();
-  if (s.begin.line == 0) return "";
-  return fmt::format(" (at {}:{}:{})", s.path ? *s.path : std::string("<scenario>"), s.begin.line,
-                     s.begin.column);
-}
-
-[[noreturn]] void fail(const std::string& key, const toml::node& n, const std::string& allowed) {
-  throw InputError(key, show(n), allowed + where(n));
-}
-
-[[noreturn]] void missing(const std::string& key, const std::string& allowed) {
-  throw InputError(key, "(missing)", "required: " + allowed);
-}
-
-void check_keys(const toml::table& t, const std::string& path, const Keys& allowed) {
-  for (auto&& [k, v] : t) {
-    const std::string_view key = k.str();
-    if (std::find(allowed.begin(), allowed.end(), key) != allowed.end()) continue;
-    std::string msg = "unknown key in " + path;
-    const std::string guess = did_you_mean(key, allowed);
-    if (!guess.empty()) msg += "; did you mean \"" + guess + "\"?";
-    msg += " Allowed keys: " + join(allowed);
-    fail(path + "." + std::string(key), v, msg);
-  }
-}
-
 const toml::table& as_table(const toml::node& n, const std::string& key, const std::string& what) {
   if (const toml::table* t = n.as_table()) return *t;
   fail(key, n, "expected a table: " + what);
-}
-
-double as_number(const toml::node& n, const std::string& key, const std::string& allowed) {
-  double v = 0;
-  if (auto i = n.as_integer())
-    v = static_cast<double>(i->get());
-  else if (auto f = n.as_floating_point())
-    v = f->get();
-  else
-    fail(key, n, "expected a number; " + allowed);
-  if (!std::isfinite(v)) fail(key, n, "must be finite; " + allowed);
-  return v;
 }
 
 template <class Ok>
@@ -275,27 +213,6 @@ template <class Ok>
 void opt_integer(const toml::table& t, const std::string& path, std::string_view k, long& out,
                  Ok ok, const std::string& allowed) {
   if (const toml::node* n = t.get(k)) out = integer(*n, path + "." + std::string(k), ok, allowed);
-}
-
-std::string as_string(const toml::node& n, const std::string& key, const std::string& allowed) {
-  auto s = n.as_string();
-  if (!s) fail(key, n, "expected a string: " + allowed);
-  return std::string(s->get());
-}
-
-bool as_bool(const toml::node& n, const std::string& key) {
-  auto b = n.as_boolean();
-  if (!b) fail(key, n, "expected true or false");
-  return b->get();
-}
-
-Vec3 as_vec3(const toml::node& n, const std::string& key, const std::string& allowed) {
-  const toml::array* a = n.as_array();
-  if (!a || a->size() != 3) fail(key, n, "expected an array of 3 numbers [x, y, z]; " + allowed);
-  Vec3 v;
-  for (int k = 0; k < 3; ++k)
-    v[k] = as_number((*a)[static_cast<std::size_t>(k)], fmt::format("{}[{}]", key, k), allowed);
-  return v;
 }
 
 // The file a key names, resolved against base_dir; must exist.

@@ -1,0 +1,427 @@
+#include "app/cmd_shear.hpp"
+
+#include "core/errors.hpp"
+#include "core/world.hpp"
+#include "io/plot.hpp"
+#include "io/shear_config.hpp"
+#include "procedures/direct_shear.hpp"
+#include "procedures/specimen.hpp"
+
+#include <CLI/CLI.hpp>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fmt/format.h>
+#include <fstream>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <numbers>
+#include <sys/types.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+namespace centridem {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+namespace {
+
+double seconds_since(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+std::string kpa_label(double sigma_Pa) { return fmt::format("{:g}", sigma_Pa / 1000.0); }
+std::string run_stem(double sigma_Pa) { return "shear_" + kpa_label(sigma_Pa) + "kPa"; }
+
+double angle_deg(double tau, double sigma) {
+  return std::atan2(tau, sigma) * 180.0 / std::numbers::pi;
+}
+
+std::string format_duration(double s) {
+  if (!std::isfinite(s) || s < 0) return "?";
+  if (s < 120) return fmt::format("{:.0f} s", s);
+  if (s < 7200) return fmt::format("{:.1f} min", s / 60);
+  return fmt::format("{:.1f} h", s / 3600);
+}
+
+void write_text(const fs::path& path, const std::string& text) {
+  std::ofstream out(path, std::ios::binary);
+  out << text;
+  if (!out) throw std::runtime_error("cannot write " + path.string());
+}
+
+// One pressure: builds the specimen into a fresh World, runs the test,
+// writes shear_<kPa>kPa.csv and shear_<kPa>kPa.json (the result with its
+// curve, read back by the parent).
+void run_one(const ShearScenario& sc, double sigma, int threads, const fs::path& out,
+             bool write_specimen, double progress_interval_s) {
+  const auto t0 = Clock::now();
+  const std::string tag = kpa_label(sigma) + " kPa";
+  auto log = [&](std::string_view line) {
+    fmt::print(stderr, "[{:7.1f} s] {}: {}\n", seconds_since(t0), tag, line);
+    std::fflush(stderr);
+  };
+  WorldSettings ws;
+  ws.local_damping = sc.local_damping;
+  ws.threads = threads;
+  World world(ws);
+  const BuiltSpecimen built = build_specimen(sc.specimen, world, log, threads);
+  if (write_specimen) write_specimen_outputs(world, built, sc.specimen, (out / "specimen").string());
+  world.set_local_damping(sc.local_damping);
+  world.set_ball_ball_defaults(sc.ball_ball);
+  world.set_body_field(BodyField::scaled_gravity(sc.g_level, 1.0));
+  const DirectShearSpec spec = sc.run_spec(sigma);
+  log(fmt::format("{} particles; consolidating to {:g} kPa", world.particles().size(),
+                  sigma / 1000));
+
+  auto last = Clock::now();
+  long last_steps = world.step_count();
+  std::optional<std::pair<Clock::time_point, double>> first; // wall time, displacement
+  const ShearProgress progress = [&](const ShearPoint& p, const DirectShearResult& r) {
+    const auto now = Clock::now();
+    if (!first) {
+      first = {now, p.shear_displacement_m};
+      log(fmt::format("consolidated in {} steps (sigma {:.1f} kPa); shearing",
+                      r.consolidation_steps, r.consolidated_normal_stress_Pa / 1000));
+    }
+    const double dt = std::chrono::duration<double>(now - last).count();
+    if (dt < progress_interval_s) return;
+    const double rate = static_cast<double>(world.particles().size()) *
+                        static_cast<double>(world.step_count() - last_steps) / dt;
+    const double done = p.shear_displacement_m - first->second;
+    const double eta =
+        done > 0 ? std::chrono::duration<double>(now - first->first).count() / done *
+                       (spec.max_shear_displacement_m - p.shear_displacement_m)
+                 : -1;
+    log(fmt::format("shear {:.3f} / {:.3f} mm, tau {:.1f} kPa, sigma {:.1f} kPa, {:.3g} "
+                    "particle-steps/s, ETA {}",
+                    p.shear_displacement_m * 1e3, spec.max_shear_displacement_m * 1e3,
+                    p.shear_stress_Pa / 1000, p.normal_stress_Pa / 1000, rate,
+                    format_duration(eta)));
+    last = now;
+    last_steps = world.step_count();
+  };
+  const DirectShearResult r = run_direct_shear(world, spec, progress);
+
+  std::string csv = "step,time_s,shear_displacement_m,shear_strain,shear_stress_Pa,"
+                    "normal_stress_Pa,vertical_displacement_m,porosity\n";
+  nlohmann::json curve = nlohmann::json::array();
+  for (const ShearPoint& p : r.curve) {
+    csv += fmt::format("{},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g}\n", p.step, p.time_s,
+                       p.shear_displacement_m, p.shear_strain, p.shear_stress_Pa,
+                       p.normal_stress_Pa, p.vertical_displacement_m, p.porosity);
+    curve.push_back({p.shear_strain, p.shear_stress_Pa, p.vertical_displacement_m});
+  }
+  write_text(out / (run_stem(sigma) + ".csv"), csv);
+  nlohmann::json j = {
+      {"normal_stress_target_Pa", r.target_normal_stress_Pa},
+      {"particles", world.particles().size()},
+      {"consolidation_steps", r.consolidation_steps},
+      {"consolidated_height_m", r.consolidated_height_m},
+      {"consolidated_normal_stress_Pa", r.consolidated_normal_stress_Pa},
+      {"shear_steps", r.curve.empty() ? 0L : r.curve.back().step - r.curve.front().step +
+                                                 spec.record_interval_steps},
+      {"peak_shear_stress_Pa", r.peak_shear_stress_Pa},
+      {"peak_strain", r.peak_strain},
+      {"residual_shear_stress_Pa", r.residual_shear_stress_Pa},
+      {"peak_friction_angle_deg", angle_deg(r.peak_shear_stress_Pa, sigma)},
+      {"residual_friction_angle_deg", angle_deg(r.residual_shear_stress_Pa, sigma)},
+      {"worst_normal_stress_deviation", r.worst_normal_stress_deviation},
+      {"particles_lost", r.particles_lost},
+      {"wall_seconds", r.wall_seconds},
+      {"particle_steps_per_s", r.particle_steps_per_s},
+      {"total_seconds_with_specimen", seconds_since(t0)},
+      {"curve_strain_tau_dz", curve}};
+  write_text(out / (run_stem(sigma) + ".json"), j.dump(1) + "\n");
+  log(fmt::format("done: peak {:.1f} kPa ({:.1f} deg) at strain {:.3f}, residual {:.1f} kPa "
+                  "({:.1f} deg), worst sigma deviation {:.1f} %, {} lost, {}",
+                  r.peak_shear_stress_Pa / 1000, angle_deg(r.peak_shear_stress_Pa, sigma),
+                  r.peak_strain, r.residual_shear_stress_Pa / 1000,
+                  angle_deg(r.residual_shear_stress_Pa, sigma),
+                  100 * r.worst_normal_stress_deviation, r.particles_lost,
+                  format_duration(seconds_since(t0))));
+}
+
+// Exit code of an exception, printing it.
+int report_error(std::string_view tag) {
+  try {
+    throw;
+  } catch (const InputError& e) {
+    fmt::print(stderr, "centridem: error: {}{}\n", tag, e.what());
+    return 2;
+  } catch (const InstabilityError& e) {
+    fmt::print(stderr, "centridem: unstable: {}{}\n", tag, e.what());
+    return 3;
+  } catch (const std::exception& e) {
+    fmt::print(stderr, "centridem: error: {}{}\n", tag, e.what());
+    return 1;
+  }
+}
+
+nlohmann::json read_json(const fs::path& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error("missing run result " + path.string());
+  return nlohmann::json::parse(in);
+}
+
+void write_plots(const ShearScenario& sc, const std::vector<double>& sigmas,
+                 const std::vector<nlohmann::json>& runs, const fs::path& out,
+                 const MohrCoulombFit& peak, const MohrCoulombFit& residual) {
+  const bool by_height = sc.test.strain == StrainDefinition::height;
+  const std::string strain_label =
+      by_height ? "shear strain = δ / H (%)" : "shear strain = δ / L (%)";
+  LinePlot tau, dz;
+  tau.title = "Shear stress";
+  tau.x_label = strain_label;
+  tau.y_label = "shear stress τ (kPa)";
+  dz.title = "Vertical displacement (+ dilation)";
+  dz.x_label = strain_label;
+  dz.y_label = "vertical displacement (mm)";
+  for (std::size_t k = 0; k < runs.size(); ++k) {
+    std::vector<double> x, y, v;
+    for (const auto& p : runs[k]["curve_strain_tau_dz"]) {
+      x.push_back(100 * p[0].get<double>());
+      y.push_back(p[1].get<double>() / 1000);
+      v.push_back(p[2].get<double>() * 1000);
+    }
+    const std::string name = "σn = " + kpa_label(sigmas[k]) + " kPa";
+    tau.add(name, x, y);
+    dz.add(name, x, v);
+  }
+  render_panels((out / "shear_curves.png").string(), {tau, dz}, 2);
+
+  LinePlot mc;
+  mc.title = "Mohr-Coulomb envelopes";
+  mc.x_label = "normal stress σn (kPa)";
+  mc.y_label = "shear stress τ (kPa)";
+  std::vector<double> s, tp, tr;
+  for (std::size_t k = 0; k < runs.size(); ++k) {
+    s.push_back(sigmas[k] / 1000);
+    tp.push_back(runs[k]["peak_shear_stress_Pa"].get<double>() / 1000);
+    tr.push_back(runs[k]["residual_shear_stress_Pa"].get<double>() / 1000);
+  }
+  const double smax = *std::max_element(s.begin(), s.end()) * 1.1;
+  mc.add("peak", s, tp).markers_only(Marker::circle).with_colour(palette_colour(0));
+  mc.add("residual", s, tr).markers_only(Marker::square).with_colour(palette_colour(1));
+  if (runs.size() >= 2) {
+    auto line = [&](const MohrCoulombFit& f) {
+      const double t = std::tan(f.friction_angle_deg * std::numbers::pi / 180);
+      return std::vector<double>{f.cohesion_Pa / 1000, f.cohesion_Pa / 1000 + t * smax};
+    };
+    mc.add(fmt::format("peak fit: c = {:.1f} kPa, φ = {:.1f}°", peak.cohesion_Pa / 1000,
+                       peak.friction_angle_deg),
+           {0, smax}, line(peak))
+        .with_colour(palette_colour(0));
+    mc.add(fmt::format("residual fit: c = {:.1f} kPa, φ = {:.1f}°", residual.cohesion_Pa / 1000,
+                       residual.friction_angle_deg),
+           {0, smax}, line(residual))
+        .dashed_line()
+        .with_colour(palette_colour(1));
+  }
+  mc.x_range = AxisRange{0, smax};
+  mc.legend = LegendPlace::upper_left;
+  mc.render((out / "mohr_coulomb.png").string(), 800, 600);
+}
+
+} // namespace
+
+int run_shear_command(const ShearCommandOptions& o) {
+  const auto t0 = Clock::now();
+  const ShearScenario sc = load_shear_scenario(o.scenario);
+  if (o.jobs < 1) throw InputError("--jobs", std::to_string(o.jobs), "must be >= 1");
+  std::vector<double> sigmas = sc.normal_stresses_Pa;
+  if (!o.pressures_kPa.empty()) {
+    sigmas.clear();
+    for (double p : o.pressures_kPa) {
+      if (!(p > 0) || !std::isfinite(p))
+        throw InputError("--pressure", fmt::format("{:g}", p), "a normal stress > 0 [kPa]");
+      sigmas.push_back(p * 1000);
+      validate(sc.run_spec(sigmas.back()));
+    }
+  }
+  std::string out_s = o.out_dir;
+  if (out_s.empty()) {
+    std::string stem = fs::path(o.scenario).stem().string();
+    if (stem.empty()) stem = "scenario";
+    out_s = "runs/" + stem + "_shear";
+  }
+  const fs::path out(out_s);
+  fs::create_directories(out);
+  write_text(out / "scenario.toml", resolved_shear_toml(sc));
+  const int threads = o.threads >= 0 ? o.threads : sc.threads;
+  const int jobs = std::min<int>(o.jobs, static_cast<int>(sigmas.size()));
+  fmt::print(stderr, "centridem shear: {} pressure(s) [{}] kPa, {} job(s), {} thread(s) per run, "
+                     "output {}\n",
+             sigmas.size(),
+             [&] {
+               std::string l;
+               for (double s : sigmas) l += (l.empty() ? "" : ", ") + kpa_label(s);
+               return l;
+             }(),
+             jobs, threads == 0 ? std::string("default") : std::to_string(threads), out.string());
+  std::fflush(stderr);
+  for (double s : sigmas) fs::remove(out / (run_stem(s) + ".json")); // stale results
+
+  int failed_rc = 0;
+  if (jobs <= 1) {
+    for (std::size_t k = 0; k < sigmas.size(); ++k)
+      run_one(sc, sigmas[k], threads, out, k == 0, o.progress_interval_s);
+  } else {
+    std::fflush(stdout);
+    std::fflush(stderr);
+    std::vector<std::pair<pid_t, double>> running;
+    std::size_t next = 0;
+    auto wait_one = [&] {
+      int status = 0;
+      const pid_t pid = ::waitpid(-1, &status, 0);
+      if (pid < 0) throw std::runtime_error("waitpid failed");
+      auto it = std::find_if(running.begin(), running.end(),
+                             [&](const auto& r) { return r.first == pid; });
+      if (it == running.end()) return;
+      const int rc = WIFEXITED(status) ? WEXITSTATUS(status) : 1;
+      if (rc != 0) {
+        fmt::print(stderr, "centridem shear: the {} kPa run failed ({})\n", kpa_label(it->second),
+                   WIFEXITED(status) ? fmt::format("exit code {}", rc)
+                                     : fmt::format("signal {}", WTERMSIG(status)));
+        if (failed_rc == 0) failed_rc = rc;
+      }
+      running.erase(it);
+    };
+    while (next < sigmas.size() || !running.empty()) {
+      if (next < sigmas.size() && static_cast<int>(running.size()) < jobs) {
+        const double sigma = sigmas[next];
+        const bool first = next == 0;
+        const pid_t pid = ::fork();
+        if (pid < 0) throw std::runtime_error("fork failed");
+        if (pid == 0) {
+          int rc = 0;
+          try {
+            run_one(sc, sigma, threads, out, first, o.progress_interval_s);
+          } catch (...) {
+            rc = report_error(kpa_label(sigma) + " kPa: ");
+          }
+          std::fflush(stdout);
+          std::fflush(stderr);
+          ::_exit(rc);
+        }
+        running.emplace_back(pid, sigma);
+        ++next;
+      } else {
+        wait_one();
+      }
+    }
+  }
+
+  // Collect.
+  std::vector<double> done_sigmas;
+  std::vector<nlohmann::json> runs;
+  for (double s : sigmas) {
+    const fs::path p = out / (run_stem(s) + ".json");
+    if (!fs::exists(p)) continue;
+    done_sigmas.push_back(s);
+    runs.push_back(read_json(p));
+  }
+  if (runs.empty()) {
+    if (failed_rc == 3) throw InstabilityError("every run failed (see the messages above)");
+    throw std::runtime_error("no run finished (see the messages above)");
+  }
+  std::vector<double> tp, tr;
+  for (const auto& r : runs) {
+    tp.push_back(r["peak_shear_stress_Pa"].get<double>());
+    tr.push_back(r["residual_shear_stress_Pa"].get<double>());
+  }
+  const MohrCoulombFit peak = fit_mohr_coulomb(done_sigmas, tp);
+  const MohrCoulombFit residual = fit_mohr_coulomb(done_sigmas, tr);
+  write_plots(sc, done_sigmas, runs, out, peak, residual);
+
+  nlohmann::json summary;
+  summary["scenario"] = o.scenario;
+  summary["box_m"] = {sc.test.box.length_m, sc.test.box.width_m, sc.test.box.height_m};
+  summary["strain"] = sc.test.strain == StrainDefinition::height ? "height" : "length";
+  summary["shear_rate_m_per_s"] = sc.test.shear_rate_m_per_s;
+  summary["max_shear_displacement_m"] = sc.test.max_shear_displacement_m;
+  summary["jobs"] = jobs;
+  summary["threads_per_run"] = threads;
+  summary["wall_seconds"] = seconds_since(t0);
+  nlohmann::json list = nlohmann::json::array();
+  for (const auto& r : runs) {
+    nlohmann::json e = r;
+    e.erase("curve_strain_tau_dz");
+    e["curve_csv"] = run_stem(r["normal_stress_target_Pa"].get<double>()) + ".csv";
+    list.push_back(e);
+  }
+  summary["runs"] = list;
+  auto fit_json = [&](const MohrCoulombFit& f) -> nlohmann::json {
+    if (runs.size() < 2) return nullptr;
+    return {{"cohesion_Pa", f.cohesion_Pa},
+            {"friction_angle_deg", f.friction_angle_deg},
+            {"r_squared", f.r_squared}};
+  };
+  summary["mohr_coulomb"] = {{"peak", fit_json(peak)}, {"residual", fit_json(residual)}};
+  write_text(out / "summary.json", summary.dump(2) + "\n");
+  for (double s : done_sigmas) fs::remove(out / (run_stem(s) + ".json"));
+
+  fmt::print("{:>8} {:>10} {:>9} {:>10} {:>10} {:>9} {:>8} {:>5}\n", "sigma", "peak", "phi_peak",
+             "strain_pk", "residual", "phi_res", "sig_dev", "lost");
+  for (const auto& r : runs)
+    fmt::print("{:>5g} kPa {:>6.1f} kPa {:>7.1f}° {:>10.3f} {:>6.1f} kPa {:>7.1f}° {:>7.1f}% {:>5}\n",
+               r["normal_stress_target_Pa"].get<double>() / 1000,
+               r["peak_shear_stress_Pa"].get<double>() / 1000,
+               r["peak_friction_angle_deg"].get<double>(), r["peak_strain"].get<double>(),
+               r["residual_shear_stress_Pa"].get<double>() / 1000,
+               r["residual_friction_angle_deg"].get<double>(),
+               100 * r["worst_normal_stress_deviation"].get<double>(),
+               r["particles_lost"].get<long>());
+  if (runs.size() >= 2)
+    fmt::print("Mohr-Coulomb peak: c = {:.2f} kPa, phi = {:.2f} deg (R^2 {:.3f}); residual: c = "
+               "{:.2f} kPa, phi = {:.2f} deg (R^2 {:.3f})\n",
+               peak.cohesion_Pa / 1000, peak.friction_angle_deg, peak.r_squared,
+               residual.cohesion_Pa / 1000, residual.friction_angle_deg, residual.r_squared);
+  fmt::print("wrote {}/summary.json, shear_curves.png, mohr_coulomb.png, shear_<kPa>kPa.csv, "
+             "scenario.toml ({})\n",
+             out.string(), format_duration(seconds_since(t0)));
+  std::fflush(stdout);
+  if (failed_rc != 0) {
+    fmt::print(stderr, "centridem shear: {} of {} runs failed\n", sigmas.size() - runs.size(),
+               sigmas.size());
+    return failed_rc;
+  }
+  return 0;
+}
+
+CLI::App* add_shear_subcommand(CLI::App& app) {
+  auto o = std::make_shared<ShearCommandOptions>();
+  CLI::App* cmd = app.add_subcommand(
+      "shear", "numerical direct shear tests, one per normal pressure (docs/shear.md)");
+  cmd->add_option("scenario", o->scenario,
+                  "scenario file (TOML) with [specimen], [contact.ball_ball] and [shear]")
+      ->required();
+  cmd->add_option("--out", o->out_dir, "output folder (default: runs/<scenario stem>_shear)");
+  cmd->add_option("--jobs", o->jobs, "pressures run at once, as child processes (default 1)")
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--pressure", o->pressures_kPa,
+                  "run only this normal pressure [kPa] (repeatable; default: shear.normal_stresses_Pa)");
+  cmd->add_option("--threads", o->threads,
+                  "OpenMP threads per run (default: shear.threads; 0 = the OpenMP default)")
+      ->check(CLI::NonNegativeNumber);
+  cmd->callback([o]() {
+    int rc = 0;
+    try {
+      rc = run_shear_command(*o);
+    } catch (...) {
+      rc = report_error("");
+    }
+    if (rc != 0) {
+      std::fflush(stdout);
+      std::fflush(stderr);
+      std::exit(rc);
+    }
+  });
+  return cmd;
+}
+
+} // namespace centridem

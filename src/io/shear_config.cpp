@@ -1,0 +1,435 @@
+#include "io/shear_config.hpp"
+#include "io/toml_read.hpp"
+
+#include "core/errors.hpp"
+#include "procedures/paper_material.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fmt/format.h>
+#include <fstream>
+#include <sstream>
+#include <toml++/toml.h>
+
+namespace centridem {
+
+namespace {
+
+using Keys = tomlread::Keys;
+using tomlread::as_number;
+using tomlread::check_keys;
+using tomlread::fail;
+using tomlread::join;
+using tomlread::missing;
+using tomlread::show;
+using tomlread::where;
+
+const Keys kTopKeys = {"description", "specimen", "contact", "shear"};
+const Keys kContactSectionKeys = {"ball_ball"};
+const Keys kContactKeys = {"model",
+                           "effective_modulus_Pa",
+                           "stiffness_ratio",
+                           "normal_stiffness_N_per_m",
+                           "shear_stiffness_N_per_m",
+                           "friction",
+                           "rolling_friction",
+                           "attraction_force_N",
+                           "attraction_range_m",
+                           "dashpot_normal_ratio",
+                           "dashpot_shear_ratio",
+                           "dashpot_mode",
+                           "limits_use_net_force"};
+const Keys kModelNames = {"linear", "rrlinear", "arrlinear"};
+const Keys kShearKeys = {"box",
+                         "normal_stresses_Pa",
+                         "shear_rate_m_per_s",
+                         "max_shear_displacement_m",
+                         "strain",
+                         "ball_wall",
+                         "during_shear",
+                         "servo_gain_factor",
+                         "servo_max_speed_m_per_s",
+                         "consolidation_ratio",
+                         "consolidation_stress_tolerance",
+                         "consolidation_max_steps",
+                         "record_interval_steps",
+                         "local_damping",
+                         "g_level",
+                         "threads"};
+const Keys kBoxKeys = {"length_m", "width_m", "height_m", "plate_length_m"};
+const Keys kStrainNames = {"height", "length"};
+
+std::string path_of(const std::string& table, std::string_view key) {
+  return table.empty() ? std::string(key) : table + "." + std::string(key);
+}
+
+const toml::table& as_table(const toml::node& n, const std::string& key, const std::string& what) {
+  if (const toml::table* t = n.as_table()) return *t;
+  fail(key, n, "expected a table: " + what);
+}
+
+template <class Ok>
+std::optional<double> opt_number(const toml::table& t, const std::string& path, std::string_view k,
+                                 Ok ok, const std::string& allowed) {
+  const toml::node* n = t.get(k);
+  if (!n) return std::nullopt;
+  const std::string key = path_of(path, k);
+  const double v = as_number(*n, key, allowed);
+  if (!ok(v)) fail(key, *n, allowed);
+  return v;
+}
+
+template <class Ok>
+std::optional<long> opt_integer(const toml::table& t, const std::string& path, std::string_view k,
+                                Ok ok, const std::string& allowed) {
+  const toml::node* n = t.get(k);
+  if (!n) return std::nullopt;
+  const std::string key = path_of(path, k);
+  const auto* i = n->as_integer();
+  if (!i) fail(key, *n, "expected an integer; " + allowed);
+  if (!ok(i->get())) fail(key, *n, allowed);
+  return static_cast<long>(i->get());
+}
+
+auto positive = [](double v) { return v > 0; };
+auto non_negative = [](double v) { return v >= 0; };
+auto unit_open = [](double v) { return v >= 0 && v < 1; };
+
+// A contact table as a patch (only the named keys); the same keys and ranges
+// as the scenario parser's [contact.ball_ball] (docs/scenario.md).
+ContactPatch read_patch(const toml::node& node, const std::string& path) {
+  const toml::table& t = as_table(node, path, "contact properties (see docs/scenario.md)");
+  check_keys(t, path, kContactKeys);
+  ContactPatch p;
+  if (const toml::node* m = t.get("model")) {
+    const auto* s = m->as_string();
+    const std::string key = path_of(path, "model");
+    if (!s || std::find(kModelNames.begin(), kModelNames.end(), s->get()) == kModelNames.end())
+      fail(key, *m, "one of " + join(kModelNames));
+    p.model = contact_model_from_string(s->get(), key);
+  }
+  p.effective_modulus_Pa =
+      opt_number(t, path, "effective_modulus_Pa", positive, "the effective modulus E*: > 0 [Pa]");
+  p.stiffness_ratio = opt_number(t, path, "stiffness_ratio", positive, "kappa* = kn/ks: > 0 [-]");
+  p.normal_stiffness_N_per_m =
+      opt_number(t, path, "normal_stiffness_N_per_m", positive, "kn: > 0 [N/m]");
+  p.shear_stiffness_N_per_m =
+      opt_number(t, path, "shear_stiffness_N_per_m", non_negative, "ks: >= 0 [N/m]");
+  p.friction = opt_number(t, path, "friction", non_negative, "the friction coefficient: >= 0 [-]");
+  p.rolling_friction = opt_number(t, path, "rolling_friction", non_negative,
+                                  "the rolling friction coefficient: >= 0 [-]");
+  p.attraction_force_N = opt_number(t, path, "attraction_force_N", non_negative,
+                                    "the maximum attractive force F0: >= 0 [N]");
+  p.attraction_range_m =
+      opt_number(t, path, "attraction_range_m", non_negative, "the attraction range D0: >= 0 [m]");
+  p.dashpot_normal_ratio =
+      opt_number(t, path, "dashpot_normal_ratio", unit_open, "must be in [0, 1) [-]");
+  p.dashpot_shear_ratio =
+      opt_number(t, path, "dashpot_shear_ratio", unit_open, "must be in [0, 1) [-]");
+  if (auto m = opt_integer(
+          t, path, "dashpot_mode", [](long v) { return v >= 0 && v <= 3; },
+          "must be 0, 1, 2 or 3 (PFC dp_mode)"))
+    p.dashpot_mode = static_cast<int>(*m);
+  if (const toml::node* n = t.get("limits_use_net_force")) {
+    const auto* b = n->as_boolean();
+    if (!b) fail(path_of(path, "limits_use_net_force"), *n, "expected true or false");
+    p.limits_use_net_force = b->get();
+  }
+  const bool deform = p.effective_modulus_Pa || p.stiffness_ratio;
+  const bool direct = p.normal_stiffness_N_per_m || p.shear_stiffness_N_per_m;
+  if (deform && direct) {
+    const char* k =
+        p.normal_stiffness_N_per_m ? "normal_stiffness_N_per_m" : "shear_stiffness_N_per_m";
+    fail(path_of(path, k), *t.get(k),
+         "give either effective_modulus_Pa (+ stiffness_ratio) or normal_stiffness_N_per_m + "
+         "shear_stiffness_N_per_m, not both");
+  }
+  if (direct && !(p.normal_stiffness_N_per_m && p.shear_stiffness_N_per_m))
+    missing(path_of(path, p.normal_stiffness_N_per_m ? "shear_stiffness_N_per_m"
+                                                     : "normal_stiffness_N_per_m"),
+            "the direct method needs both normal_stiffness_N_per_m and shear_stiffness_N_per_m");
+  return p;
+}
+
+// `patch` over `base`, validated.
+ContactProperties resolve(const ContactPatch& p, const ContactProperties& base,
+                          const std::string& path) {
+  ContactProperties c = apply(p, base);
+  validate(c, path);
+  return c;
+}
+
+std::string num(double v) {
+  std::string s = fmt::format("{}", v);
+  if (s.find_first_of(".eEn") == std::string::npos) s += ".0"; // keep floats floats
+  return s;
+}
+
+std::string contact_inline(const ContactProperties& c) {
+  std::string o = fmt::format("{{ model = \"{}\"", to_string(c.model));
+  if (c.stiffness_method == StiffnessMethod::direct)
+    o += fmt::format(", normal_stiffness_N_per_m = {}, shear_stiffness_N_per_m = {}",
+                     num(c.normal_stiffness_N_per_m), num(c.shear_stiffness_N_per_m));
+  else
+    o += fmt::format(", effective_modulus_Pa = {}, stiffness_ratio = {}",
+                     num(c.effective_modulus_Pa), num(c.stiffness_ratio));
+  o += fmt::format(", friction = {}, rolling_friction = {}, attraction_force_N = {}, "
+                   "attraction_range_m = {}, dashpot_normal_ratio = {}, dashpot_shear_ratio = {}, "
+                   "dashpot_mode = {}, limits_use_net_force = {} }}",
+                   num(c.friction), num(c.rolling_friction), num(c.attraction_force_N),
+                   num(c.attraction_range_m), num(c.dashpot_normal_ratio),
+                   num(c.dashpot_shear_ratio), c.dashpot_mode, c.limits_use_net_force);
+  return o;
+}
+
+std::string patch_inline(const ContactPatch& p) {
+  std::vector<std::string> parts;
+  if (p.model) parts.push_back(fmt::format("model = \"{}\"", to_string(*p.model)));
+  auto add = [&](const char* k, const std::optional<double>& v) {
+    if (v) parts.push_back(fmt::format("{} = {}", k, num(*v)));
+  };
+  add("effective_modulus_Pa", p.effective_modulus_Pa);
+  add("stiffness_ratio", p.stiffness_ratio);
+  add("normal_stiffness_N_per_m", p.normal_stiffness_N_per_m);
+  add("shear_stiffness_N_per_m", p.shear_stiffness_N_per_m);
+  add("friction", p.friction);
+  add("rolling_friction", p.rolling_friction);
+  add("attraction_force_N", p.attraction_force_N);
+  add("attraction_range_m", p.attraction_range_m);
+  add("dashpot_normal_ratio", p.dashpot_normal_ratio);
+  add("dashpot_shear_ratio", p.dashpot_shear_ratio);
+  if (p.dashpot_mode) parts.push_back(fmt::format("dashpot_mode = {}", *p.dashpot_mode));
+  if (p.limits_use_net_force)
+    parts.push_back(fmt::format("limits_use_net_force = {}", *p.limits_use_net_force));
+  std::string o = "{";
+  for (std::size_t i = 0; i < parts.size(); ++i) o += (i ? ", " : " ") + parts[i];
+  return o + (parts.empty() ? "}" : " }");
+}
+
+} // namespace
+
+DirectShearSpec ShearScenario::run_spec(double normal_stress_Pa) const {
+  DirectShearSpec s = test;
+  s.normal_stress_Pa = normal_stress_Pa;
+  if (!during_shear.empty())
+    s.ball_ball_during_shear = apply(during_shear, ball_ball);
+  else
+    s.ball_ball_during_shear.reset();
+  return s;
+}
+
+ShearScenario parse_shear_scenario(std::string_view text, const std::string& source_name,
+                                   const std::string& base_dir) {
+  toml::table root;
+  try {
+    root = toml::parse(text, source_name.empty() ? std::string_view("<scenario>")
+                                                 : std::string_view(source_name));
+  } catch (const toml::parse_error& e) {
+    const toml::source_region& s = e.source();
+    throw InputError(fmt::format("{}:{}:{}: TOML syntax error: {}", s.path ? *s.path : source_name,
+                                 s.begin.line, s.begin.column, e.description()));
+  }
+  check_keys(root, "", kTopKeys);
+  ShearScenario sc;
+  sc.source_path = source_name;
+  sc.base_dir = base_dir;
+  if (const toml::node* d = root.get("description")) {
+    const auto* s = d->as_string();
+    if (!s) fail("description", *d, "expected a string");
+    sc.description = s->get();
+  }
+
+  // [contact.ball_ball]: complete (model and a stiffness required).
+  const toml::node* contact = root.get("contact");
+  if (!contact)
+    missing("contact.ball_ball", "a [contact.ball_ball] table with at least model and "
+                                 "effective_modulus_Pa (docs/scenario.md)");
+  const toml::table& ct = as_table(*contact, "contact", "[contact.ball_ball]");
+  check_keys(ct, "contact", kContactSectionKeys);
+  const toml::node* bb = ct.get("ball_ball");
+  if (!bb)
+    missing("contact.ball_ball", "a [contact.ball_ball] table with at least model and "
+                                 "effective_modulus_Pa (docs/scenario.md)");
+  {
+    const ContactPatch p = read_patch(*bb, "contact.ball_ball");
+    if (!p.model)
+      missing("contact.ball_ball.model", "the contact model: one of " + join(kModelNames));
+    if (!p.effective_modulus_Pa && !p.normal_stiffness_N_per_m)
+      missing("contact.ball_ball.effective_modulus_Pa",
+              "the effective modulus E* > 0 [Pa], or normal_stiffness_N_per_m + "
+              "shear_stiffness_N_per_m");
+    sc.ball_ball = resolve(p, ContactProperties{}, "contact.ball_ball");
+  }
+
+  // [specimen] (its own parser; it ignores the other tables).
+  sc.specimen = parse_specimen(text, source_name, base_dir);
+
+  // [shear]
+  const std::string P = "shear";
+  const toml::node* sn = root.get(P);
+  if (!sn) missing(P, "a [shear] table with at least normal_stresses_Pa (docs/shear.md)");
+  const toml::table& t = as_table(*sn, P, "the direct shear test (docs/shear.md)");
+  check_keys(t, P, kShearKeys);
+  DirectShearSpec& s = sc.test;
+
+  // The box: by default the specimen's region, which must start at the origin.
+  const std::optional<Box> region = sc.specimen.region;
+  if (region) {
+    s.box.length_m = region->hi.x - region->lo.x;
+    s.box.width_m = region->hi.y - region->lo.y;
+    s.box.height_m = region->hi.z - region->lo.z;
+  }
+  if (const toml::node* bn = t.get("box")) {
+    const std::string bp = P + ".box";
+    const toml::table& b = as_table(*bn, bp, "{ length_m, width_m, height_m }");
+    check_keys(b, bp, kBoxKeys);
+    const std::string dims = "> 0 [m]";
+    auto dim = [&](std::string_view k, double& out) {
+      if (auto v = opt_number(b, bp, k, positive, dims))
+        out = *v;
+      else if (!region)
+        missing(path_of(bp, k), "the box dimension " + dims);
+    };
+    dim("length_m", s.box.length_m);
+    dim("width_m", s.box.width_m);
+    dim("height_m", s.box.height_m);
+    if (auto v = opt_number(b, bp, "plate_length_m", non_negative,
+                            "length of the shear-plane plates: >= 0 [m] (0 = automatic)"))
+      s.box.plate_length_m = *v;
+  } else if (!region) {
+    missing(P + ".box", "{ length_m, width_m, height_m } (or a specimen.region)");
+  }
+  if (region) {
+    const double tol = 1e-9;
+    const Vec3 lo = region->lo, hi = region->hi;
+    const bool ok = std::abs(lo.x) < tol && std::abs(lo.y) < tol && std::abs(lo.z) < tol &&
+                    std::abs(hi.x - s.box.length_m) < tol && std::abs(hi.y - s.box.width_m) < tol &&
+                    std::abs(hi.z - s.box.height_m) < tol;
+    if (!ok)
+      throw InputError("specimen.region",
+                       fmt::format("{{ lo_m = [{}, {}, {}], hi_m = [{}, {}, {}] }}", lo.x, lo.y,
+                                   lo.z, hi.x, hi.y, hi.z),
+                       fmt::format("must be the shear box: lo_m = [0, 0, 0], hi_m = [{}, {}, {}] "
+                                   "(shear.box length_m, width_m, height_m)",
+                                   s.box.length_m, s.box.width_m, s.box.height_m));
+  }
+
+  const toml::node* ns = t.get("normal_stresses_Pa");
+  if (!ns)
+    missing(P + ".normal_stresses_Pa", "a list of normal stresses > 0 [Pa], e.g. [40e3, 60e3]");
+  {
+    const std::string key = P + ".normal_stresses_Pa";
+    const toml::array* a = ns->as_array();
+    if (!a || a->empty()) fail(key, *ns, "expected a non-empty list of normal stresses > 0 [Pa]");
+    for (std::size_t i = 0; i < a->size(); ++i) {
+      const std::string ki = fmt::format("{}[{}]", key, i);
+      const double v = as_number((*a)[i], ki, "a normal stress > 0 [Pa]");
+      if (!(v > 0)) fail(ki, (*a)[i], "a normal stress > 0 [Pa]");
+      for (double prev : sc.normal_stresses_Pa)
+        if (std::abs(prev - v) <= 1e-9 * v) fail(ki, (*a)[i], "each normal stress once");
+      sc.normal_stresses_Pa.push_back(v);
+    }
+  }
+  if (auto v = opt_number(t, P, "shear_rate_m_per_s", positive, "the upper box speed: > 0 [m/s]"))
+    s.shear_rate_m_per_s = *v;
+  s.max_shear_displacement_m = 0.2 * s.box.height_m; // default: 20 % strain on the height
+  if (auto v = opt_number(
+          t, P, "max_shear_displacement_m", [&](double x) { return x > 0 && x < s.box.length_m; },
+          "the upper box travel: > 0 and below the box length [m]"))
+    s.max_shear_displacement_m = *v;
+  if (const toml::node* n = t.get("strain")) {
+    const auto* str = n->as_string();
+    if (!str ||
+        std::find(kStrainNames.begin(), kStrainNames.end(), str->get()) == kStrainNames.end())
+      fail(P + ".strain", *n,
+           "\"height\" (shear displacement / box height) or \"length\" (/ box length)");
+    s.strain = str->get() == "height" ? StrainDefinition::height : StrainDefinition::length;
+  }
+  s.ball_wall = paper::ball_wall(0.0);
+  if (const toml::node* n = t.get("ball_wall"))
+    s.ball_wall = resolve(read_patch(*n, P + ".ball_wall"), s.ball_wall, P + ".ball_wall");
+  if (const toml::node* n = t.get("during_shear")) {
+    sc.during_shear = read_patch(*n, P + ".during_shear");
+    validate(apply(sc.during_shear, sc.ball_ball), P + ".during_shear");
+  }
+  if (auto v = opt_number(
+          t, P, "servo_gain_factor", [](double x) { return x > 0 && x <= 1; },
+          "the servo's alpha: in (0, 1] [-]"))
+    s.servo_gain_factor = *v;
+  if (auto v = opt_number(t, P, "servo_max_speed_m_per_s", positive,
+                          "the servo's speed limit: > 0 [m/s]"))
+    s.servo_max_speed_m_per_s = *v;
+  if (auto v = opt_number(t, P, "consolidation_ratio", positive,
+                          "mean unbalanced-force ratio that ends consolidation: > 0 [-]"))
+    s.consolidation_ratio = *v;
+  if (auto v = opt_number(t, P, "consolidation_stress_tolerance", positive,
+                          "|sigma - target| / target that ends consolidation: > 0 [-]"))
+    s.consolidation_stress_tolerance = *v;
+  auto pos_int = [](long v) { return v > 0; };
+  if (auto v = opt_integer(t, P, "consolidation_max_steps", pos_int, "a step limit > 0"))
+    s.consolidation_max_steps = *v;
+  if (auto v =
+          opt_integer(t, P, "record_interval_steps", pos_int, "steps between curve points: > 0"))
+    s.record_interval_steps = *v;
+  if (auto v = opt_number(t, P, "local_damping", unit_open, "Cundall local damping in [0, 1) [-]"))
+    sc.local_damping = *v;
+  if (auto v = opt_number(t, P, "g_level", non_negative,
+                          "gravity along -z in multiples of 9.81 m/s^2: >= 0 [-]"))
+    sc.g_level = *v;
+  if (auto v = opt_integer(
+          t, P, "threads", [](long x) { return x >= 0 && x <= 1024; },
+          "OpenMP threads per run: 0 (the OpenMP default) to 1024"))
+    sc.threads = static_cast<int>(*v);
+  validate(sc.run_spec(sc.normal_stresses_Pa.front())); // cross-key checks, dotted keys
+  return sc;
+}
+
+ShearScenario load_shear_scenario(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in || std::filesystem::is_directory(path))
+    throw InputError("scenario file", "\"" + path + "\"", "cannot be opened for reading");
+  std::stringstream buffer;
+  buffer << in.rdbuf();
+  std::filesystem::path base = std::filesystem::path(path).parent_path();
+  if (base.empty()) base = ".";
+  return parse_shear_scenario(buffer.str(), path, base.string());
+}
+
+std::string resolved_shear_toml(const ShearScenario& sc) {
+  std::string o;
+  if (!sc.description.empty()) {
+    std::string d;
+    for (char c : sc.description) {
+      if (c == '"' || c == '\\') d += '\\';
+      d += c;
+    }
+    o += fmt::format("description = \"{}\"\n\n", d);
+  }
+  o += resolved_specimen_toml(sc.specimen);
+  o += "\n[contact]\nball_ball = " + contact_inline(sc.ball_ball) + "\n";
+  const DirectShearSpec& s = sc.test;
+  o += "\n[shear]\n";
+  o += fmt::format("box = {{ length_m = {}, width_m = {}, height_m = {}, plate_length_m = {} }}\n",
+                   num(s.box.length_m), num(s.box.width_m), num(s.box.height_m),
+                   num(s.box.plate_length_m));
+  std::string list;
+  for (double v : sc.normal_stresses_Pa) list += (list.empty() ? "" : ", ") + num(v);
+  o += "normal_stresses_Pa = [" + list + "]\n";
+  o += fmt::format("shear_rate_m_per_s = {}\n", num(s.shear_rate_m_per_s));
+  o += fmt::format("max_shear_displacement_m = {}\n", num(s.max_shear_displacement_m));
+  o += fmt::format("strain = \"{}\"\n", s.strain == StrainDefinition::height ? "height" : "length");
+  o += "ball_wall = " + contact_inline(s.ball_wall) + "\n";
+  o += "during_shear = " + patch_inline(sc.during_shear) + "\n";
+  o += fmt::format("servo_gain_factor = {}\nservo_max_speed_m_per_s = {}\n",
+                   num(s.servo_gain_factor), num(s.servo_max_speed_m_per_s));
+  o += fmt::format("consolidation_ratio = {}\nconsolidation_stress_tolerance = {}\n",
+                   num(s.consolidation_ratio), num(s.consolidation_stress_tolerance));
+  o += fmt::format("consolidation_max_steps = {}\nrecord_interval_steps = {}\n",
+                   s.consolidation_max_steps, s.record_interval_steps);
+  o += fmt::format("local_damping = {}\ng_level = {}\nthreads = {}\n", num(sc.local_damping),
+                   num(sc.g_level), sc.threads);
+  return o;
+}
+
+} // namespace centridem

@@ -1,0 +1,137 @@
+#include "io/toml_read.hpp"
+
+#include "core/errors.hpp"
+#include "io/scenario.hpp" // did_you_mean
+
+#include <algorithm>
+#include <cmath>
+#include <fmt/format.h>
+
+namespace centridem::tomlread {
+
+std::string quote(std::string_view s) {
+  std::string out = "\"";
+  for (char c : s) {
+    switch (c) {
+    case '"':
+      out += "\\\"";
+      break;
+    case '\\':
+      out += "\\\\";
+      break;
+    case '\n':
+      out += "\\n";
+      break;
+    case '\t':
+      out += "\\t";
+      break;
+    case '\r':
+      out += "\\r";
+      break;
+    default:
+      if (static_cast<unsigned char>(c) < 0x20)
+        out += fmt::format("\\u{:04X}", static_cast<unsigned>(c));
+      else
+        out += c;
+    }
+  }
+  return out + "\"";
+}
+
+std::string join(const Keys& keys) {
+  std::string out;
+  for (std::string_view k : keys) out += (out.empty() ? "" : ", ") + std::string(k);
+  return out;
+}
+
+std::string show(const toml::node& n) {
+  switch (n.type()) {
+  case toml::node_type::string:
+    return quote(n.as_string()->get());
+  case toml::node_type::integer:
+    return fmt::format("{}", n.as_integer()->get());
+  case toml::node_type::floating_point:
+    return fmt::format("{}", n.as_floating_point()->get());
+  case toml::node_type::boolean:
+    return n.as_boolean()->get() ? "true" : "false";
+  case toml::node_type::array: {
+    const toml::array& a = *n.as_array();
+    std::string out = "[";
+    for (std::size_t i = 0; i < a.size() && i < 8; ++i) out += (i ? ", " : "") + show(a[i]);
+    return out + (a.size() > 8 ? ", ...]" : "]");
+  }
+  case toml::node_type::table: {
+    std::string out = "{";
+    for (auto&& [k, v] : *n.as_table())
+      out += (out.size() > 1 ? ", " : " ") + std::string(k.str()) + " = " + show(v);
+    return out + " }";
+  }
+  default:
+    return "(a date/time)";
+  }
+}
+
+std::string where(const toml::node& n) {
+  const toml::source_region& s = n.source();
+  if (s.begin.line == 0) return "";
+  return fmt::format(" (at {}:{}:{})", s.path ? *s.path : std::string("<scenario>"), s.begin.line,
+                     s.begin.column);
+}
+
+void fail(const std::string& key, const toml::node& n, const std::string& allowed) {
+  throw InputError(key, show(n), allowed + where(n));
+}
+
+void missing(const std::string& key, const std::string& allowed) {
+  throw InputError(key, "(missing)", "required: " + allowed);
+}
+
+double as_number(const toml::node& n, const std::string& key, const std::string& allowed) {
+  double v = 0;
+  if (auto i = n.as_integer())
+    v = static_cast<double>(i->get());
+  else if (auto f = n.as_floating_point())
+    v = f->get();
+  else
+    fail(key, n, "expected a number; " + allowed);
+  if (!std::isfinite(v)) fail(key, n, "must be finite; " + allowed);
+  return v;
+}
+
+bool as_bool(const toml::node& n, const std::string& key) {
+  if (auto b = n.as_boolean()) return b->get();
+  fail(key, n, "expected true or false");
+}
+
+std::string as_string(const toml::node& n, const std::string& key, const std::string& allowed) {
+  if (auto s = n.as_string()) return s->get();
+  fail(key, n, "expected a string; " + allowed);
+}
+
+Vec3 as_vec3(const toml::node& n, const std::string& key, const std::string& allowed) {
+  const toml::array* a = n.as_array();
+  if (!a || a->size() != 3) fail(key, n, "expected an array of 3 numbers [x, y, z]; " + allowed);
+  Vec3 v;
+  for (int c = 0; c < 3; ++c)
+    v[c] = as_number((*a)[static_cast<std::size_t>(c)], fmt::format("{}[{}]", key, c), allowed);
+  return v;
+}
+
+void check_keys(const toml::table& t, const std::string& path, const Keys& allowed,
+                const std::function<std::string(std::string_view)>& hint) {
+  for (auto&& [k, v] : t) {
+    const std::string_view key = k.str();
+    if (std::find(allowed.begin(), allowed.end(), key) != allowed.end()) continue;
+    std::string msg = "unknown key";
+    if (!path.empty()) msg += " in " + path;
+    const std::string guess = did_you_mean(key, allowed);
+    if (!guess.empty())
+      msg += " (did you mean \"" + guess + "\"?)";
+    else if (hint)
+      msg += hint(key);
+    msg += "; allowed keys: " + join(allowed);
+    fail(path.empty() ? std::string(key) : path + "." + std::string(key), v, msg);
+  }
+}
+
+} // namespace centridem::tomlread

@@ -1,0 +1,34 @@
+// Reading TOML tables with checked keys and typed values: the helpers every
+// scenario section uses (the scenario itself, [specimen], [shear]). Every
+// failure is an InputError naming the full dotted key, the value as written,
+// what is allowed, and FILE:LINE:COLUMN.
+#pragma once
+
+#include "core/vec3.hpp"
+
+#include <functional>
+#include <string>
+#include <string_view>
+#include <toml++/toml.h>
+#include <vector>
+
+namespace centridem::tomlread {
+
+using Keys = std::vector<std::string_view>;
+
+std::string quote(std::string_view s);  // "..." with escapes
+std::string join(const Keys& keys);     // a, b, c
+std::string show(const toml::node& n);  // a value as written
+std::string where(const toml::node& n); // " (at FILE:LINE:COLUMN)" or ""
+[[noreturn]] void fail(const std::string& key, const toml::node& n, const std::string& allowed);
+[[noreturn]] void missing(const std::string& key, const std::string& allowed);
+// Rejects keys of t not in `allowed`, suggesting the nearest allowed one;
+// `hint(key)` may add advice for a key that belongs elsewhere.
+void check_keys(const toml::table& t, const std::string& path, const Keys& allowed,
+                const std::function<std::string(std::string_view)>& hint = {});
+double as_number(const toml::node& n, const std::string& key, const std::string& allowed);
+bool as_bool(const toml::node& n, const std::string& key);
+std::string as_string(const toml::node& n, const std::string& key, const std::string& allowed);
+Vec3 as_vec3(const toml::node& n, const std::string& key, const std::string& allowed);
+
+} // namespace centridem::tomlread
