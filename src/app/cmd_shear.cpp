@@ -34,8 +34,12 @@ double seconds_since(Clock::time_point t0) {
   return std::chrono::duration<double>(Clock::now() - t0).count();
 }
 
-std::string kpa_label(double sigma_Pa) { return fmt::format("{:g}", sigma_Pa / 1000.0); }
-std::string run_stem(double sigma_Pa) { return "shear_" + kpa_label(sigma_Pa) + "kPa"; }
+std::string kpa_label(double sigma_Pa) {
+  return fmt::format("{:g}", sigma_Pa / 1000.0);
+}
+std::string run_stem(double sigma_Pa) {
+  return "shear_" + kpa_label(sigma_Pa) + "kPa";
+}
 
 double angle_deg(double tau, double sigma) {
   return std::atan2(tau, sigma) * 180.0 / std::numbers::pi;
@@ -70,7 +74,8 @@ void run_one(const ShearScenario& sc, double sigma, int threads, const fs::path&
   ws.threads = threads;
   World world(ws);
   const BuiltSpecimen built = build_specimen(sc.specimen, world, log, threads);
-  if (write_specimen) write_specimen_outputs(world, built, sc.specimen, (out / "specimen").string());
+  if (write_specimen)
+    write_specimen_outputs(world, built, sc.specimen, (out / "specimen").string());
   world.set_local_damping(sc.local_damping);
   world.set_ball_ball_defaults(sc.ball_ball);
   world.set_body_field(BodyField::scaled_gravity(sc.g_level, 1.0));
@@ -93,10 +98,9 @@ void run_one(const ShearScenario& sc, double sigma, int threads, const fs::path&
     const double rate = static_cast<double>(world.particles().size()) *
                         static_cast<double>(world.step_count() - last_steps) / dt;
     const double done = p.shear_displacement_m - first->second;
-    const double eta =
-        done > 0 ? std::chrono::duration<double>(now - first->first).count() / done *
-                       (spec.max_shear_displacement_m - p.shear_displacement_m)
-                 : -1;
+    const double eta = done > 0 ? std::chrono::duration<double>(now - first->first).count() / done *
+                                      (spec.max_shear_displacement_m - p.shear_displacement_m)
+                                : -1;
     log(fmt::format("shear {:.3f} / {:.3f} mm, tau {:.1f} kPa, sigma {:.1f} kPa, {:.3g} "
                     "particle-steps/s, ETA {}",
                     p.shear_displacement_m * 1e3, spec.max_shear_displacement_m * 1e3,
@@ -117,33 +121,32 @@ void run_one(const ShearScenario& sc, double sigma, int threads, const fs::path&
     curve.push_back({p.shear_strain, p.shear_stress_Pa, p.vertical_displacement_m});
   }
   write_text(out / (run_stem(sigma) + ".csv"), csv);
-  nlohmann::json j = {
-      {"normal_stress_target_Pa", r.target_normal_stress_Pa},
-      {"particles", world.particles().size()},
-      {"consolidation_steps", r.consolidation_steps},
-      {"consolidated_height_m", r.consolidated_height_m},
-      {"consolidated_normal_stress_Pa", r.consolidated_normal_stress_Pa},
-      {"shear_steps", r.curve.empty() ? 0L : r.curve.back().step - r.curve.front().step +
-                                                 spec.record_interval_steps},
-      {"peak_shear_stress_Pa", r.peak_shear_stress_Pa},
-      {"peak_strain", r.peak_strain},
-      {"residual_shear_stress_Pa", r.residual_shear_stress_Pa},
-      {"peak_friction_angle_deg", angle_deg(r.peak_shear_stress_Pa, sigma)},
-      {"residual_friction_angle_deg", angle_deg(r.residual_shear_stress_Pa, sigma)},
-      {"worst_normal_stress_deviation", r.worst_normal_stress_deviation},
-      {"particles_lost", r.particles_lost},
-      {"wall_seconds", r.wall_seconds},
-      {"particle_steps_per_s", r.particle_steps_per_s},
-      {"total_seconds_with_specimen", seconds_since(t0)},
-      {"curve_strain_tau_dz", curve}};
+  nlohmann::json j = {{"normal_stress_target_Pa", r.target_normal_stress_Pa},
+                      {"particles", world.particles().size()},
+                      {"consolidation_steps", r.consolidation_steps},
+                      {"consolidated_height_m", r.consolidated_height_m},
+                      {"consolidated_normal_stress_Pa", r.consolidated_normal_stress_Pa},
+                      {"shear_steps", r.curve.empty() ? 0L
+                                                      : r.curve.back().step - r.curve.front().step +
+                                                            spec.record_interval_steps},
+                      {"peak_shear_stress_Pa", r.peak_shear_stress_Pa},
+                      {"peak_strain", r.peak_strain},
+                      {"residual_shear_stress_Pa", r.residual_shear_stress_Pa},
+                      {"peak_friction_angle_deg", angle_deg(r.peak_shear_stress_Pa, sigma)},
+                      {"residual_friction_angle_deg", angle_deg(r.residual_shear_stress_Pa, sigma)},
+                      {"worst_normal_stress_deviation", r.worst_normal_stress_deviation},
+                      {"particles_lost", r.particles_lost},
+                      {"wall_seconds", r.wall_seconds},
+                      {"particle_steps_per_s", r.particle_steps_per_s},
+                      {"total_seconds_with_specimen", seconds_since(t0)},
+                      {"curve_strain_tau_dz", curve}};
   write_text(out / (run_stem(sigma) + ".json"), j.dump(1) + "\n");
-  log(fmt::format("done: peak {:.1f} kPa ({:.1f} deg) at strain {:.3f}, residual {:.1f} kPa "
-                  "({:.1f} deg), worst sigma deviation {:.1f} %, {} lost, {}",
-                  r.peak_shear_stress_Pa / 1000, angle_deg(r.peak_shear_stress_Pa, sigma),
-                  r.peak_strain, r.residual_shear_stress_Pa / 1000,
-                  angle_deg(r.residual_shear_stress_Pa, sigma),
-                  100 * r.worst_normal_stress_deviation, r.particles_lost,
-                  format_duration(seconds_since(t0))));
+  log(fmt::format(
+      "done: peak {:.1f} kPa ({:.1f} deg) at strain {:.3f}, residual {:.1f} kPa "
+      "({:.1f} deg), worst sigma deviation {:.1f} %, {} lost, {}",
+      r.peak_shear_stress_Pa / 1000, angle_deg(r.peak_shear_stress_Pa, sigma), r.peak_strain,
+      r.residual_shear_stress_Pa / 1000, angle_deg(r.residual_shear_stress_Pa, sigma),
+      100 * r.worst_normal_stress_deviation, r.particles_lost, format_duration(seconds_since(t0))));
 }
 
 // Exit code of an exception, printing it.
@@ -254,15 +257,17 @@ int run_shear_command(const ShearCommandOptions& o) {
   write_text(out / "scenario.toml", resolved_shear_toml(sc));
   const int threads = o.threads >= 0 ? o.threads : sc.threads;
   const int jobs = std::min<int>(o.jobs, static_cast<int>(sigmas.size()));
-  fmt::print(stderr, "centridem shear: {} pressure(s) [{}] kPa, {} job(s), {} thread(s) per run, "
-                     "output {}\n",
-             sigmas.size(),
-             [&] {
-               std::string l;
-               for (double s : sigmas) l += (l.empty() ? "" : ", ") + kpa_label(s);
-               return l;
-             }(),
-             jobs, threads == 0 ? std::string("default") : std::to_string(threads), out.string());
+  fmt::print(
+      stderr,
+      "centridem shear: {} pressure(s) [{}] kPa, {} job(s), {} thread(s) per run, "
+      "output {}\n",
+      sigmas.size(),
+      [&] {
+        std::string l;
+        for (double s : sigmas) l += (l.empty() ? "" : ", ") + kpa_label(s);
+        return l;
+      }(),
+      jobs, threads == 0 ? std::string("default") : std::to_string(threads), out.string());
   std::fflush(stderr);
   for (double s : sigmas) fs::remove(out / (run_stem(s) + ".json")); // stale results
 
@@ -368,14 +373,13 @@ int run_shear_command(const ShearCommandOptions& o) {
   fmt::print("{:>8} {:>10} {:>9} {:>10} {:>10} {:>9} {:>8} {:>5}\n", "sigma", "peak", "phi_peak",
              "strain_pk", "residual", "phi_res", "sig_dev", "lost");
   for (const auto& r : runs)
-    fmt::print("{:>5g} kPa {:>6.1f} kPa {:>7.1f}° {:>10.3f} {:>6.1f} kPa {:>7.1f}° {:>7.1f}% {:>5}\n",
-               r["normal_stress_target_Pa"].get<double>() / 1000,
-               r["peak_shear_stress_Pa"].get<double>() / 1000,
-               r["peak_friction_angle_deg"].get<double>(), r["peak_strain"].get<double>(),
-               r["residual_shear_stress_Pa"].get<double>() / 1000,
-               r["residual_friction_angle_deg"].get<double>(),
-               100 * r["worst_normal_stress_deviation"].get<double>(),
-               r["particles_lost"].get<long>());
+    fmt::print(
+        "{:>5g} kPa {:>6.1f} kPa {:>7.1f}° {:>10.3f} {:>6.1f} kPa {:>7.1f}° {:>7.1f}% {:>5}\n",
+        r["normal_stress_target_Pa"].get<double>() / 1000,
+        r["peak_shear_stress_Pa"].get<double>() / 1000, r["peak_friction_angle_deg"].get<double>(),
+        r["peak_strain"].get<double>(), r["residual_shear_stress_Pa"].get<double>() / 1000,
+        r["residual_friction_angle_deg"].get<double>(),
+        100 * r["worst_normal_stress_deviation"].get<double>(), r["particles_lost"].get<long>());
   if (runs.size() >= 2)
     fmt::print("Mohr-Coulomb peak: c = {:.2f} kPa, phi = {:.2f} deg (R^2 {:.3f}); residual: c = "
                "{:.2f} kPa, phi = {:.2f} deg (R^2 {:.3f})\n",
@@ -403,8 +407,9 @@ CLI::App* add_shear_subcommand(CLI::App& app) {
   cmd->add_option("--out", o->out_dir, "output folder (default: runs/<scenario stem>_shear)");
   cmd->add_option("--jobs", o->jobs, "pressures run at once, as child processes (default 1)")
       ->check(CLI::PositiveNumber);
-  cmd->add_option("--pressure", o->pressures_kPa,
-                  "run only this normal pressure [kPa] (repeatable; default: shear.normal_stresses_Pa)");
+  cmd->add_option(
+      "--pressure", o->pressures_kPa,
+      "run only this normal pressure [kPa] (repeatable; default: shear.normal_stresses_Pa)");
   cmd->add_option("--threads", o->threads,
                   "OpenMP threads per run (default: shear.threads; 0 = the OpenMP default)")
       ->check(CLI::NonNegativeNumber);

@@ -19,11 +19,11 @@ namespace centridem {
 
 struct ShearCommandOptions {
   std::string scenario;
-  std::string out_dir;                // "" = runs/<scenario stem>_shear
-  int jobs = 1;                       // parallel runs (child processes)
-  std::vector<double> pressures_kPa;  // empty: the scenario's list
-  int threads = -1;                   // per run; < 0: the scenario's shear.threads
-  double progress_interval_s = 10.0;  // seconds between progress lines
+  std::string out_dir;               // "" = runs/<scenario stem>_shear
+  int jobs = 1;                      // parallel runs (child processes)
+  std::vector<double> pressures_kPa; // empty: the scenario's list
+  int threads = -1;                  // per run; < 0: the scenario's shear.threads
+  double progress_interval_s = 10.0; // seconds between progress lines
 };
 
 // Runs the command; returns the exit code (0). Throws InputError for bad

@@ -4,9 +4,9 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
-#include <cmath>
 #include <limits>
 #include <memory>
 #include <numeric>
@@ -25,14 +25,22 @@ struct MapEntry {
 // entries plus the last; linear interpolation between them stays within
 // about 1/255 of the full table.
 constexpr std::array<MapEntry, 17> viridis_table{{
-    {0, {0.267004, 0.004874, 0.329415}},   {16, {0.282327, 0.094955, 0.417331}},
-    {32, {0.278826, 0.175490, 0.483397}},  {48, {0.258965, 0.251537, 0.524736}},
-    {64, {0.229739, 0.322361, 0.545706}},  {80, {0.199430, 0.387607, 0.554642}},
-    {96, {0.172719, 0.448791, 0.557885}},  {112, {0.149039, 0.508051, 0.557250}},
-    {128, {0.127568, 0.566949, 0.550556}}, {144, {0.120638, 0.625828, 0.533488}},
-    {160, {0.157851, 0.683765, 0.501686}}, {176, {0.246070, 0.738910, 0.452024}},
-    {192, {0.369214, 0.788888, 0.382914}}, {208, {0.515992, 0.831158, 0.294279}},
-    {224, {0.678489, 0.863742, 0.189503}}, {240, {0.845561, 0.887322, 0.099702}},
+    {0, {0.267004, 0.004874, 0.329415}},
+    {16, {0.282327, 0.094955, 0.417331}},
+    {32, {0.278826, 0.175490, 0.483397}},
+    {48, {0.258965, 0.251537, 0.524736}},
+    {64, {0.229739, 0.322361, 0.545706}},
+    {80, {0.199430, 0.387607, 0.554642}},
+    {96, {0.172719, 0.448791, 0.557885}},
+    {112, {0.149039, 0.508051, 0.557250}},
+    {128, {0.127568, 0.566949, 0.550556}},
+    {144, {0.120638, 0.625828, 0.533488}},
+    {160, {0.157851, 0.683765, 0.501686}},
+    {176, {0.246070, 0.738910, 0.452024}},
+    {192, {0.369214, 0.788888, 0.382914}},
+    {208, {0.515992, 0.831158, 0.294279}},
+    {224, {0.678489, 0.863742, 0.189503}},
+    {240, {0.845561, 0.887322, 0.099702}},
     {255, {0.993248, 0.906157, 0.143936}},
 }};
 
@@ -91,20 +99,30 @@ SideViewWindow side_view_window(const SideViewInput& in) {
     if (use_y && !(std::abs(in.y[i] - in.slice_y_mid) < in.slice_half_thickness)) continue;
     const double r = std::isfinite(in.radius[i]) ? in.radius[i] : 0.0;
     if (!std::isfinite(in.x[i]) || !std::isfinite(in.z[i])) continue;
-    x0 = std::min(x0, in.x[i] - r); x1 = std::max(x1, in.x[i] + r);
-    z0 = std::min(z0, in.z[i] - r); z1 = std::max(z1, in.z[i] + r);
+    x0 = std::min(x0, in.x[i] - r);
+    x1 = std::max(x1, in.x[i] + r);
+    z0 = std::min(z0, in.z[i] - r);
+    z1 = std::max(z1, in.z[i] + r);
   }
   auto add_line = [&](const SideViewPolyline& l) {
     for (std::size_t k = 0; k < std::min(l.x.size(), l.z.size()); ++k) {
       if (!std::isfinite(l.x[k]) || !std::isfinite(l.z[k])) continue;
-      x0 = std::min(x0, l.x[k]); x1 = std::max(x1, l.x[k]);
-      z0 = std::min(z0, l.z[k]); z1 = std::max(z1, l.z[k]);
+      x0 = std::min(x0, l.x[k]);
+      x1 = std::max(x1, l.x[k]);
+      z0 = std::min(z0, l.z[k]);
+      z1 = std::max(z1, l.z[k]);
     }
   };
   add_line(in.outline);
   if (!(x1 >= x0)) return {0, 1, 0, 1};
-  if (!(x1 > x0)) { x0 -= 0.5; x1 += 0.5; }
-  if (!(z1 > z0)) { z0 -= 0.5 * (x1 - x0); z1 += 0.5 * (x1 - x0); }
+  if (!(x1 > x0)) {
+    x0 -= 0.5;
+    x1 += 0.5;
+  }
+  if (!(z1 > z0)) {
+    z0 -= 0.5 * (x1 - x0);
+    z1 += 0.5 * (x1 - x0);
+  }
   const double m = 0.03 * std::max(x1 - x0, z1 - z0);
   return {x0 - m, x1 + m, z0 - m, z1 + m};
 }
@@ -142,9 +160,13 @@ void draw_text(cairo_t* cr, const std::string& s, double x, double y, double ax,
   cairo_new_path(cr);
 }
 
-void set_colour(cairo_t* cr, const Rgb& c) { cairo_set_source_rgb(cr, c.r, c.g, c.b); }
+void set_colour(cairo_t* cr, const Rgb& c) {
+  cairo_set_source_rgb(cr, c.r, c.g, c.b);
+}
 
-double crisp(double v) { return std::floor(v) + 0.5; }
+double crisp(double v) {
+  return std::floor(v) + 0.5;
+}
 
 // Labelled values of the colour bar: both ends, then 1-2-5 values inside
 // (log) or nice ticks (linear), skipping any too close to one already placed.
@@ -165,7 +187,8 @@ std::vector<double> colour_bar_ticks(const SideViewInput& in, double bar_px, dou
     const double f = scale_fraction(v, in.vmin, in.vmax, in.log_scale);
     bool ok = true;
     for (double u : out)
-      if (std::abs(f - scale_fraction(u, in.vmin, in.vmax, in.log_scale)) * bar_px < min_gap_px) ok = false;
+      if (std::abs(f - scale_fraction(u, in.vmin, in.vmax, in.log_scale)) * bar_px < min_gap_px)
+        ok = false;
     if (ok) out.push_back(v);
   }
   std::sort(out.begin(), out.end());
@@ -199,9 +222,9 @@ void draw_disc(const PixelTarget& t, double cx, double cy, double r, const Rgb& 
   const double cov_scale = r < 0.5 ? std::max(0.25, (r * r) / 0.25) : 1.0;
   const double solid = std::max(0.0, re - 0.5 - (rim ? rim_w + 0.5 : 0.0)); // fully inside, no rim
   const double solid2 = solid * solid;
-  const auto fill_px = static_cast<std::uint32_t>(
-      (static_cast<std::uint32_t>(fr + 0.5) << 16) | (static_cast<std::uint32_t>(fg + 0.5) << 8) |
-      static_cast<std::uint32_t>(fb + 0.5));
+  const auto fill_px = static_cast<std::uint32_t>((static_cast<std::uint32_t>(fr + 0.5) << 16) |
+                                                  (static_cast<std::uint32_t>(fg + 0.5) << 8) |
+                                                  static_cast<std::uint32_t>(fb + 0.5));
   const double outer2 = (re + 0.5) * (re + 0.5);
   for (int py = iy0; py < iy1; ++py) {
     const double dy = py + 0.5 - cy;
@@ -231,8 +254,11 @@ void draw_disc(const PixelTarget& t, double cx, double cy, double r, const Rgb& 
       const std::uint32_t dst = row[px];
       const double dr = (dst >> 16) & 0xff, dg = (dst >> 8) & 0xff, db = dst & 0xff;
       const double b = 1.0 - a;
-      const auto out = [](double v) { return static_cast<std::uint32_t>(std::clamp(v + 0.5, 0.0, 255.0)); };
-      row[px] = (out(dr * b + fr * k * a) << 16) | (out(dg * b + fg * k * a) << 8) | out(db * b + fb * k * a);
+      const auto out = [](double v) {
+        return static_cast<std::uint32_t>(std::clamp(v + 0.5, 0.0, 255.0));
+      };
+      row[px] = (out(dr * b + fr * k * a) << 16) | (out(dg * b + fg * k * a) << 8) |
+                out(db * b + fb * k * a);
     };
     if (core1 > core0) {
       for (int px = px0; px < core0; ++px) edge(px);
@@ -268,8 +294,8 @@ Frame frame_for(const SideViewInput& in) {
   SideViewLayout& L = f.layout;
   L.window = in.window ? *in.window : side_view_window(in);
   const SideViewWindow& win = L.window;
-  if (!(win.x_max > win.x_min) || !(win.z_max > win.z_min) || !std::isfinite(win.x_max - win.x_min) ||
-      !std::isfinite(win.z_max - win.z_min))
+  if (!(win.x_max > win.x_min) || !(win.z_max > win.z_min) ||
+      !std::isfinite(win.x_max - win.x_min) || !std::isfinite(win.z_max - win.z_min))
     throw std::invalid_argument("render_side_view: the window is empty");
   // Title on top (with a key of the lines under it), z axis on the left, x
   // axis below, colour bar on the right. Sizes scale with the width (1200 px
@@ -303,7 +329,9 @@ Frame frame_for(const SideViewInput& in) {
 
 } // namespace
 
-SideViewLayout side_view_layout(const SideViewInput& in) { return frame_for(in).layout; }
+SideViewLayout side_view_layout(const SideViewInput& in) {
+  return frame_for(in).layout;
+}
 
 SideViewLayout render_side_view(const SideViewInput& in, const std::string& png_path) {
   const std::size_t n = in.x.size();
@@ -365,10 +393,13 @@ SideViewLayout render_side_view(const SideViewInput& in, const std::string& png_
   // costs ~8 us a circle, ~30x more), clipped to the plot area.
   {
     cairo_surface_flush(surface.get());
-    PixelTarget target{reinterpret_cast<std::uint32_t*>(cairo_image_surface_get_data(surface.get())),
-                       cairo_image_surface_get_stride(surface.get()) / 4,
-                       static_cast<int>(std::floor(pa_x0)), static_cast<int>(std::floor(pa_y0)),
-                       static_cast<int>(std::ceil(pa_x0 + plot_w)), static_cast<int>(std::ceil(pa_y0 + plot_h))};
+    PixelTarget target{
+        reinterpret_cast<std::uint32_t*>(cairo_image_surface_get_data(surface.get())),
+        cairo_image_surface_get_stride(surface.get()) / 4,
+        static_cast<int>(std::floor(pa_x0)),
+        static_cast<int>(std::floor(pa_y0)),
+        static_cast<int>(std::ceil(pa_x0 + plot_w)),
+        static_cast<int>(std::ceil(pa_y0 + plot_h))};
     for (std::uint32_t i : order) {
       const double v = in.value.empty() ? std::numeric_limits<double>::quiet_NaN() : in.value[i];
       const Rgb c = scale_colour(v, in.vmin, in.vmax, in.log_scale, in.colour_map);
@@ -393,9 +424,14 @@ SideViewLayout render_side_view(const SideViewInput& in, const std::string& png_
     }
     bool pen = false;
     for (std::size_t j = 0; j < l.x.size(); ++j) {
-      if (!std::isfinite(l.x[j]) || !std::isfinite(l.z[j])) { pen = false; continue; }
-      if (pen) cairo_line_to(cr, X(l.x[j]), Z(l.z[j]));
-      else cairo_move_to(cr, X(l.x[j]), Z(l.z[j]));
+      if (!std::isfinite(l.x[j]) || !std::isfinite(l.z[j])) {
+        pen = false;
+        continue;
+      }
+      if (pen)
+        cairo_line_to(cr, X(l.x[j]), Z(l.z[j]));
+      else
+        cairo_move_to(cr, X(l.x[j]), Z(l.z[j]));
       pen = true;
     }
     if (l.dashed) {
@@ -430,23 +466,27 @@ SideViewLayout render_side_view(const SideViewInput& in, const std::string& png_
   const auto xticks = nice_ticks(xmm0, xmm1, xt), zticks = nice_ticks(zmm0, zmm1, zt);
   for (double v : xticks) {
     const double px = crisp(X(v * 1e-3));
-    cairo_move_to(cr, px, fy1); cairo_line_to(cr, px, fy1 + tick_len);
+    cairo_move_to(cr, px, fy1);
+    cairo_line_to(cr, px, fy1 + tick_len);
   }
   for (double v : zticks) {
     const double py = crisp(Z(v * 1e-3));
-    cairo_move_to(cr, fx0, py); cairo_line_to(cr, fx0 - tick_len, py);
+    cairo_move_to(cr, fx0, py);
+    cairo_line_to(cr, fx0 - tick_len, py);
   }
   cairo_stroke(cr);
   set_font(cr, f_tick);
   const double tick_cap = cap_height(cr);
   cairo_set_source_rgb(cr, 0.15, 0.15, 0.15);
   for (double v : xticks)
-    draw_text(cr, format_tick(v, xstep), X(v * 1e-3), fy1 + tick_len + 5 * s + tick_cap, 0.5, false);
-  for (double v : zticks) draw_text(cr, format_tick(v, zstep), fx0 - tick_len - 4 * s, Z(v * 1e-3), 1.0, true);
+    draw_text(cr, format_tick(v, xstep), X(v * 1e-3), fy1 + tick_len + 5 * s + tick_cap, 0.5,
+              false);
+  for (double v : zticks)
+    draw_text(cr, format_tick(v, zstep), fx0 - tick_len - 4 * s, Z(v * 1e-3), 1.0, true);
   set_font(cr, f_label);
   const double label_cap = cap_height(cr);
-  draw_text(cr, "x (mm)", pa_x0 + 0.5 * plot_w, fy1 + tick_len + 5 * s + tick_cap + 10 * s + label_cap, 0.5,
-            false);
+  draw_text(cr, "x (mm)", pa_x0 + 0.5 * plot_w,
+            fy1 + tick_len + 5 * s + tick_cap + 10 * s + label_cap, 0.5, false);
   {
     cairo_save(cr);
     cairo_translate(cr, 14 * s + label_cap, pa_y0 + 0.5 * plot_h);
@@ -557,7 +597,8 @@ SideViewLayout render_side_view(const SideViewInput& in, const std::string& png_
     }
     set_font(cr, f_label);
     cairo_save(cr);
-    cairo_translate(cr, bx + bar_w + tick_len + 4 * s + label_w + 12 * s + label_cap, by + 0.5 * bar_h);
+    cairo_translate(cr, bx + bar_w + tick_len + 4 * s + label_w + 12 * s + label_cap,
+                    by + 0.5 * bar_h);
     cairo_rotate(cr, -M_PI / 2);
     cairo_set_source_rgb(cr, 0.1, 0.1, 0.1);
     draw_text(cr, in.value_label, 0, 0, 0.5, false);

@@ -44,11 +44,11 @@ inline constexpr Rgb below_scale_colour{0.80, 0.84, 0.89};
 inline constexpr Rgb outline_red{0.86, 0.08, 0.08};
 
 struct SideViewPolyline {
-  std::vector<double> x, z;                 // m
+  std::vector<double> x, z; // m
   Rgb colour{0.05, 0.05, 0.05};
   double width_px = 2.0;
   bool dashed = true;
-  std::string label;                        // shown in a small key when not empty
+  std::string label; // shown in a small key when not empty
 };
 
 // The model region a picture shows, m.
@@ -59,8 +59,8 @@ struct SideViewWindow {
 struct SideViewInput {
   // Particles (same length; y may be empty when not slicing: then drawn in
   // the given order).
-  std::vector<double> x, y, z, radius;      // m
-  std::vector<double> value;                // per particle, e.g. |displacement| (m)
+  std::vector<double> x, y, z, radius; // m
+  std::vector<double> value;           // per particle, e.g. |displacement| (m)
 
   // Colour scale.
   double vmin = 1.2e-4, vmax = 5e-3;
@@ -76,9 +76,9 @@ struct SideViewInput {
   SideViewPolyline outline{{}, {}, outline_red, 2.0, false, "undeformed surface"};
   std::vector<SideViewPolyline> extra_lines; // e.g. the slip surface (dashed by default)
 
-  std::string title;                        // one line above the picture
-  int width_px = 1200;                      // picture width; the height follows the data
-  std::optional<SideViewWindow> window;     // empty: bounding box of particles and outline
+  std::string title;                    // one line above the picture
+  int width_px = 1200;                  // picture width; the height follows the data
+  std::optional<SideViewWindow> window; // empty: bounding box of particles and outline
 };
 
 // The region render_side_view() shows by default: the particles' bounding box

@@ -101,7 +101,8 @@ std::string format_tick(double value, double step) {
     return s;
   }
   int decimals = 0;
-  if (step > 0 && step < 1) decimals = std::clamp(static_cast<int>(std::ceil(-std::log10(step) - 1e-9)), 0, 8);
+  if (step > 0 && step < 1)
+    decimals = std::clamp(static_cast<int>(std::ceil(-std::log10(step) - 1e-9)), 0, 8);
   std::snprintf(buf, sizeof buf, "%.*f", decimals, value);
   std::string s(buf);
   if (s == "-0" || s.find_first_not_of("-0.") == std::string::npos) return "0";
@@ -198,7 +199,9 @@ struct Axis {
   std::string label(double v) const { return log ? format_log_tick(v) : format_tick(v, step); }
 };
 
-bool usable(double v, bool log) { return std::isfinite(v) && (!log || v > 0); }
+bool usable(double v, bool log) {
+  return std::isfinite(v) && (!log || v > 0);
+}
 
 Axis make_linear_axis(double dlo, double dhi, bool have_data, bool pad,
                       const std::optional<AxisRange>& fixed) {
@@ -211,7 +214,10 @@ Axis make_linear_axis(double dlo, double dhi, bool have_data, bool pad,
     a.major = ticks_with_step(a.lo, a.hi, a.step);
     return a;
   }
-  if (!have_data) { dlo = 0; dhi = 1; }
+  if (!have_data) {
+    dlo = 0;
+    dhi = 1;
+  }
   if (!(dhi > dlo)) {
     const double d = dlo == 0 ? 1.0 : 0.1 * std::abs(dlo);
     dlo -= d;
@@ -238,7 +244,10 @@ Axis make_log_axis(double dlo, double dhi, bool have_data, const std::optional<A
     a.hi = std::max(fixed->min, fixed->max);
     if (!(a.hi > a.lo)) a.hi = a.lo * 10;
   } else {
-    if (!have_data) { dlo = 1; dhi = 10; }
+    if (!have_data) {
+      dlo = 1;
+      dhi = 10;
+    }
     a.lo = std::pow(10.0, std::floor(std::log10(dlo) + 1e-9));
     a.hi = std::pow(10.0, std::ceil(std::log10(dhi) - 1e-9));
     if (!(a.hi > a.lo)) a.hi = a.lo * 10;
@@ -261,7 +270,9 @@ Axis make_log_axis(double dlo, double dhi, bool have_data, const std::optional<A
   return a;
 }
 
-std::vector<double> dash_pattern(double lw) { return {3.5 * lw + 2, 2.0 * lw + 2}; }
+std::vector<double> dash_pattern(double lw) {
+  return {3.5 * lw + 2, 2.0 * lw + 2};
+}
 
 void draw_marker(cairo_t* cr, Marker m, double x, double y, double size, const Rgb& c) {
   const double r = 0.5 * size;
@@ -297,11 +308,15 @@ void draw_marker(cairo_t* cr, Marker m, double x, double y, double size, const R
     cairo_set_line_cap(cr, CAIRO_LINE_CAP_ROUND);
     set_colour(cr, c);
     if (m == Marker::cross) {
-      cairo_move_to(cr, x - d, y - d); cairo_line_to(cr, x + d, y + d);
-      cairo_move_to(cr, x - d, y + d); cairo_line_to(cr, x + d, y - d);
+      cairo_move_to(cr, x - d, y - d);
+      cairo_line_to(cr, x + d, y + d);
+      cairo_move_to(cr, x - d, y + d);
+      cairo_line_to(cr, x + d, y - d);
     } else {
-      cairo_move_to(cr, x - d, y); cairo_line_to(cr, x + d, y);
-      cairo_move_to(cr, x, y - d); cairo_line_to(cr, x, y + d);
+      cairo_move_to(cr, x - d, y);
+      cairo_line_to(cr, x + d, y);
+      cairo_move_to(cr, x, y - d);
+      cairo_line_to(cr, x, y + d);
     }
     cairo_stroke(cr);
     cairo_restore(cr);
@@ -345,8 +360,10 @@ void draw_plot(cairo_t* cr, const LinePlot& p, const Box& box) {
     if (!se.line && n > 0) any_markers = true;
     for (std::size_t k = 0; k < n; ++k) {
       if (!usable(se.x[k], p.log_x) || !std::isfinite(se.y[k])) continue;
-      xlo = std::min(xlo, se.x[k]); xhi = std::max(xhi, se.x[k]);
-      ylo = std::min(ylo, se.y[k]); yhi = std::max(yhi, se.y[k]);
+      xlo = std::min(xlo, se.x[k]);
+      xhi = std::max(xhi, se.x[k]);
+      ylo = std::min(ylo, se.y[k]);
+      yhi = std::max(yhi, se.y[k]);
       have = true;
     }
   }
@@ -363,11 +380,16 @@ void draw_plot(cairo_t* cr, const LinePlot& p, const Box& box) {
   set_font(cr, f_label);
   const double label_cap = cap_height(cr);
   const double top = p.title.empty() ? 18 * s : f_title * 2.1;
-  const double left = pad * 2 + (p.y_label.empty() ? 0 : label_cap + pad * 1.6) + ytick_w + tick_len + 4 * s;
-  const double bottom = tick_len + pad + tick_cap + (p.x_label.empty() ? pad : pad * 2.2 + label_cap + pad);
+  const double left =
+      pad * 2 + (p.y_label.empty() ? 0 : label_cap + pad * 1.6) + ytick_w + tick_len + 4 * s;
+  const double bottom =
+      tick_len + pad + tick_cap + (p.x_label.empty() ? pad : pad * 2.2 + label_cap + pad);
   const double right = std::max(20 * s, 0.5 * xtick_last_w + 8 * s);
   const Box pa{box.x0 + left, box.y0 + top, box.w - left - right, box.h - top - bottom};
-  if (pa.w < 10 || pa.h < 10) { cairo_restore(cr); return; }
+  if (pa.w < 10 || pa.h < 10) {
+    cairo_restore(cr);
+    return;
+  }
 
   auto px = [&](double v) { return pa.x0 + ax.frac(v) * pa.w; };
   auto py = [&](double v) { return pa.y0 + pa.h - ay.frac(v) * pa.h; };
@@ -380,17 +402,20 @@ void draw_plot(cairo_t* cr, const LinePlot& p, const Box& box) {
     cairo_set_source_rgb(cr, 0.93, 0.93, 0.93);
     for (double v : ax.minor) {
       const double X = crisp(px(v));
-      cairo_move_to(cr, X, pa.y0); cairo_line_to(cr, X, pa.y0 + pa.h);
+      cairo_move_to(cr, X, pa.y0);
+      cairo_line_to(cr, X, pa.y0 + pa.h);
     }
     cairo_stroke(cr);
     cairo_set_source_rgb(cr, 0.86, 0.86, 0.86);
     for (double v : ax.major) {
       const double X = crisp(px(v));
-      cairo_move_to(cr, X, pa.y0); cairo_line_to(cr, X, pa.y0 + pa.h);
+      cairo_move_to(cr, X, pa.y0);
+      cairo_line_to(cr, X, pa.y0 + pa.h);
     }
     for (double v : ay.major) {
       const double Y = crisp(py(v));
-      cairo_move_to(cr, pa.x0, Y); cairo_line_to(cr, pa.x0 + pa.w, Y);
+      cairo_move_to(cr, pa.x0, Y);
+      cairo_line_to(cr, pa.x0 + pa.w, Y);
     }
     cairo_stroke(cr);
   }
@@ -414,9 +439,15 @@ void draw_plot(cairo_t* cr, const LinePlot& p, const Box& box) {
       }
       bool pen_down = false;
       for (std::size_t k = 0; k < n; ++k) {
-        if (!usable(se.x[k], p.log_x) || !std::isfinite(se.y[k])) { pen_down = false; continue; }
+        if (!usable(se.x[k], p.log_x) || !std::isfinite(se.y[k])) {
+          pen_down = false;
+          continue;
+        }
         const double X = px(se.x[k]), Y = py(se.y[k]);
-        if (pen_down) cairo_line_to(cr, X, Y); else cairo_move_to(cr, X, Y);
+        if (pen_down)
+          cairo_line_to(cr, X, Y);
+        else
+          cairo_move_to(cr, X, Y);
         pen_down = true;
       }
       cairo_stroke(cr);
@@ -447,22 +478,26 @@ void draw_plot(cairo_t* cr, const LinePlot& p, const Box& box) {
   cairo_stroke(cr);
   for (double v : ax.major) {
     const double X = crisp(px(v));
-    cairo_move_to(cr, X, fy1); cairo_line_to(cr, X, fy1 + tick_len);
+    cairo_move_to(cr, X, fy1);
+    cairo_line_to(cr, X, fy1 + tick_len);
   }
   for (double v : ax.minor) {
     const double X = crisp(px(v));
-    cairo_move_to(cr, X, fy1); cairo_line_to(cr, X, fy1 + 0.6 * tick_len);
+    cairo_move_to(cr, X, fy1);
+    cairo_line_to(cr, X, fy1 + 0.6 * tick_len);
   }
   for (double v : ay.major) {
     const double Y = crisp(py(v));
-    cairo_move_to(cr, fx0, Y); cairo_line_to(cr, fx0 - tick_len, Y);
+    cairo_move_to(cr, fx0, Y);
+    cairo_line_to(cr, fx0 - tick_len, Y);
   }
   cairo_stroke(cr);
 
   // Tick labels.
   cairo_set_source_rgb(cr, 0.15, 0.15, 0.15);
   set_font(cr, f_tick);
-  for (double v : ax.major) draw_text(cr, ax.label(v), px(v), fy1 + tick_len + pad * 0.6 + tick_cap, 0.5, false);
+  for (double v : ax.major)
+    draw_text(cr, ax.label(v), px(v), fy1 + tick_len + pad * 0.6 + tick_cap, 0.5, false);
   for (double v : ay.major) draw_text(cr, ay.label(v), fx0 - tick_len - 4 * s, py(v), 1.0, true);
 
   // Axis labels and title.
@@ -521,7 +556,10 @@ void draw_plot(cairo_t* cr, const LinePlot& p, const Box& box) {
           const std::size_t n = std::min(se.x.size(), se.y.size());
           double pX = NAN, pY = NAN;
           for (std::size_t k = 0; k < n; ++k) {
-            if (!usable(se.x[k], p.log_x) || !std::isfinite(se.y[k])) { pX = NAN; continue; }
+            if (!usable(se.x[k], p.log_x) || !std::isfinite(se.y[k])) {
+              pX = NAN;
+              continue;
+            }
             const double X = px(se.x[k]), Y = py(se.y[k]);
             if (se.line && std::isfinite(pX)) {
               const double len = std::hypot(X - pX, Y - pY);
@@ -532,10 +570,14 @@ void draw_plot(cairo_t* cr, const LinePlot& p, const Box& box) {
               }
             }
             hits += inside(X, Y) ? 3 : 0;
-            pX = X; pY = Y;
+            pX = X;
+            pY = Y;
           }
         }
-        if (hits < best_hits) { best_hits = hits; at = xy; }
+        if (hits < best_hits) {
+          best_hits = hits;
+          at = xy;
+        }
       }
     } else {
       for (const auto& [place, xy] : corners)

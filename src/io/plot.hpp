@@ -35,20 +35,33 @@ Rgb palette_colour(std::size_t index);
 enum class Marker { none, circle, square, triangle, diamond, cross, plus };
 
 struct Series {
-  std::string name;             // legend entry; empty: not in the legend
-  std::vector<double> x, y;     // same length; non-finite points break the line
-  std::optional<Rgb> colour;    // empty: palette_colour(index of the series)
-  bool line = true;             // false: markers only (a point chart)
+  std::string name;          // legend entry; empty: not in the legend
+  std::vector<double> x, y;  // same length; non-finite points break the line
+  std::optional<Rgb> colour; // empty: palette_colour(index of the series)
+  bool line = true;          // false: markers only (a point chart)
   bool dashed = false;
   Marker marker = Marker::none;
   double line_width_px = 2.0;
-  double marker_size_px = 9.0;  // marker diameter
+  double marker_size_px = 9.0; // marker diameter
 
   // Chainable setters for the common cases.
-  Series& dashed_line() { dashed = true; return *this; }
-  Series& markers(Marker m = Marker::circle) { marker = m; return *this; }
-  Series& markers_only(Marker m = Marker::circle) { marker = m; line = false; return *this; }
-  Series& with_colour(Rgb c) { colour = c; return *this; }
+  Series& dashed_line() {
+    dashed = true;
+    return *this;
+  }
+  Series& markers(Marker m = Marker::circle) {
+    marker = m;
+    return *this;
+  }
+  Series& markers_only(Marker m = Marker::circle) {
+    marker = m;
+    line = false;
+    return *this;
+  }
+  Series& with_colour(Rgb c) {
+    colour = c;
+    return *this;
+  }
 };
 
 enum class LegendPlace { best, upper_left, upper_right, lower_left, lower_right, none };
@@ -60,9 +73,9 @@ struct AxisRange {
 struct LinePlot {
   std::string title, x_label, y_label;
   std::vector<Series> series;
-  bool log_x = false;                // base-10 x axis; points with x <= 0 are skipped
-  bool grid = true;                  // light grid lines at the major ticks
-  std::optional<AxisRange> x_range;  // empty: from the data, widened to whole ticks
+  bool log_x = false;               // base-10 x axis; points with x <= 0 are skipped
+  bool grid = true;                 // light grid lines at the major ticks
+  std::optional<AxisRange> x_range; // empty: from the data, widened to whole ticks
   std::optional<AxisRange> y_range;
   LegendPlace legend = LegendPlace::best; // best: the corner hiding the fewest points
 
@@ -77,8 +90,8 @@ struct LinePlot {
 
 // Several plots in one picture, row by row, `columns` per row, each panel
 // panel_width x panel_height pixels.
-void render_panels(const std::string& png_path, const std::vector<LinePlot>& plots,
-                   int columns = 2, int panel_width = 700, int panel_height = 500);
+void render_panels(const std::string& png_path, const std::vector<LinePlot>& plots, int columns = 2,
+                   int panel_width = 700, int panel_height = 500);
 
 // Shared helpers (also used by the side view in picture.hpp).
 // The multiples of a 1-2-5 step (1, 2 or 5 times a power of ten) that lie in

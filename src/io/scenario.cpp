@@ -834,6 +834,10 @@ Scenario parse_table(const toml::table& root, const std::string& source_name,
 
 } // namespace
 
+ContactPatch read_contact_patch(const toml::node& node, const std::string& path) {
+  return read_contact(node, path);
+}
+
 Scenario parse_scenario(std::string_view text, const std::string& source_name,
                         const std::string& base_dir) {
   toml::table root;

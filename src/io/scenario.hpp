@@ -17,6 +17,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <toml++/toml.h>
 #include <vector>
 
 namespace centridem {
@@ -61,6 +62,9 @@ struct ContactPatch {
 // or stiffness_ratio selects the deformability method, naming a stiffness in
 // N/m the direct method. Does not validate (see resolve in scenario.cpp).
 ContactProperties apply(const ContactPatch& patch, ContactProperties base);
+// Reads a contact-properties table (the keys of [contact.ball_ball]) at `path`,
+// validating every key; used by every section that takes contact properties.
+ContactPatch read_contact_patch(const toml::node& node, const std::string& path);
 
 struct SimulationSpec {
   WorldSettings world;               // timestep_s 0 = "auto"

@@ -27,19 +27,6 @@ using tomlread::where;
 
 const Keys kTopKeys = {"description", "specimen", "contact", "shear"};
 const Keys kContactSectionKeys = {"ball_ball"};
-const Keys kContactKeys = {"model",
-                           "effective_modulus_Pa",
-                           "stiffness_ratio",
-                           "normal_stiffness_N_per_m",
-                           "shear_stiffness_N_per_m",
-                           "friction",
-                           "rolling_friction",
-                           "attraction_force_N",
-                           "attraction_range_m",
-                           "dashpot_normal_ratio",
-                           "dashpot_shear_ratio",
-                           "dashpot_mode",
-                           "limits_use_net_force"};
 const Keys kModelNames = {"linear", "rrlinear", "arrlinear"};
 const Keys kShearKeys = {"box",
                          "normal_stresses_Pa",
@@ -99,57 +86,7 @@ auto unit_open = [](double v) { return v >= 0 && v < 1; };
 // A contact table as a patch (only the named keys); the same keys and ranges
 // as the scenario parser's [contact.ball_ball] (docs/scenario.md).
 ContactPatch read_patch(const toml::node& node, const std::string& path) {
-  const toml::table& t = as_table(node, path, "contact properties (see docs/scenario.md)");
-  check_keys(t, path, kContactKeys);
-  ContactPatch p;
-  if (const toml::node* m = t.get("model")) {
-    const auto* s = m->as_string();
-    const std::string key = path_of(path, "model");
-    if (!s || std::find(kModelNames.begin(), kModelNames.end(), s->get()) == kModelNames.end())
-      fail(key, *m, "one of " + join(kModelNames));
-    p.model = contact_model_from_string(s->get(), key);
-  }
-  p.effective_modulus_Pa =
-      opt_number(t, path, "effective_modulus_Pa", positive, "the effective modulus E*: > 0 [Pa]");
-  p.stiffness_ratio = opt_number(t, path, "stiffness_ratio", positive, "kappa* = kn/ks: > 0 [-]");
-  p.normal_stiffness_N_per_m =
-      opt_number(t, path, "normal_stiffness_N_per_m", positive, "kn: > 0 [N/m]");
-  p.shear_stiffness_N_per_m =
-      opt_number(t, path, "shear_stiffness_N_per_m", non_negative, "ks: >= 0 [N/m]");
-  p.friction = opt_number(t, path, "friction", non_negative, "the friction coefficient: >= 0 [-]");
-  p.rolling_friction = opt_number(t, path, "rolling_friction", non_negative,
-                                  "the rolling friction coefficient: >= 0 [-]");
-  p.attraction_force_N = opt_number(t, path, "attraction_force_N", non_negative,
-                                    "the maximum attractive force F0: >= 0 [N]");
-  p.attraction_range_m =
-      opt_number(t, path, "attraction_range_m", non_negative, "the attraction range D0: >= 0 [m]");
-  p.dashpot_normal_ratio =
-      opt_number(t, path, "dashpot_normal_ratio", unit_open, "must be in [0, 1) [-]");
-  p.dashpot_shear_ratio =
-      opt_number(t, path, "dashpot_shear_ratio", unit_open, "must be in [0, 1) [-]");
-  if (auto m = opt_integer(
-          t, path, "dashpot_mode", [](long v) { return v >= 0 && v <= 3; },
-          "must be 0, 1, 2 or 3 (PFC dp_mode)"))
-    p.dashpot_mode = static_cast<int>(*m);
-  if (const toml::node* n = t.get("limits_use_net_force")) {
-    const auto* b = n->as_boolean();
-    if (!b) fail(path_of(path, "limits_use_net_force"), *n, "expected true or false");
-    p.limits_use_net_force = b->get();
-  }
-  const bool deform = p.effective_modulus_Pa || p.stiffness_ratio;
-  const bool direct = p.normal_stiffness_N_per_m || p.shear_stiffness_N_per_m;
-  if (deform && direct) {
-    const char* k =
-        p.normal_stiffness_N_per_m ? "normal_stiffness_N_per_m" : "shear_stiffness_N_per_m";
-    fail(path_of(path, k), *t.get(k),
-         "give either effective_modulus_Pa (+ stiffness_ratio) or normal_stiffness_N_per_m + "
-         "shear_stiffness_N_per_m, not both");
-  }
-  if (direct && !(p.normal_stiffness_N_per_m && p.shear_stiffness_N_per_m))
-    missing(path_of(path, p.normal_stiffness_N_per_m ? "shear_stiffness_N_per_m"
-                                                     : "normal_stiffness_N_per_m"),
-            "the direct method needs both normal_stiffness_N_per_m and shear_stiffness_N_per_m");
-  return p;
+  return read_contact_patch(node, path);
 }
 
 // `patch` over `base`, validated.

@@ -23,14 +23,14 @@ struct ShearScenario {
   std::string source_path; // the scenario file ("" when parsed from text)
   std::string base_dir;    // folder that relative paths are resolved against
   std::string description;
-  SpecimenSpec specimen;                 // [specimen]; its region is the box [0, L]x[0, W]x[0, H]
-  ContactProperties ball_ball;           // [contact.ball_ball], complete
-  ContactPatch during_shear;             // shear.during_shear: patch over ball_ball while shearing
-  DirectShearSpec test;                  // every [shear] setting; normal_stress_Pa unused
+  SpecimenSpec specimen;                  // [specimen]; its region is the box [0, L]x[0, W]x[0, H]
+  ContactProperties ball_ball;            // [contact.ball_ball], complete
+  ContactPatch during_shear;              // shear.during_shear: patch over ball_ball while shearing
+  DirectShearSpec test;                   // every [shear] setting; normal_stress_Pa unused
   std::vector<double> normal_stresses_Pa; // one run each [Pa]
-  double local_damping = 0.7;            // Cundall local damping (Table 1) [-]
-  double g_level = 1.0;                  // gravity n g along -z [-]
-  int threads = 1;                       // OpenMP threads per run (0 = the OpenMP default)
+  double local_damping = 0.7;             // Cundall local damping (Table 1) [-]
+  double g_level = 1.0;                   // gravity n g along -z [-]
+  int threads = 1;                        // OpenMP threads per run (0 = the OpenMP default)
 
   // The spec of one run at `normal_stress_Pa` (ball_ball_during_shear set
   // when during_shear names any key).

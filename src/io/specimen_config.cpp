@@ -168,19 +168,6 @@ const Keys kRelaxKeys = {
     "ratio",         "max_overlap_ratio",    "max_steps",       "calm_interval",
     "local_damping", "effective_modulus_Pa", "stiffness_ratio", "contact",
     "contact_ratio", "contact_max_steps"};
-const Keys kContactKeys = {"model",
-                           "effective_modulus_Pa",
-                           "stiffness_ratio",
-                           "normal_stiffness_N_per_m",
-                           "shear_stiffness_N_per_m",
-                           "friction",
-                           "rolling_friction",
-                           "attraction_force_N",
-                           "attraction_range_m",
-                           "dashpot_normal_ratio",
-                           "dashpot_shear_ratio",
-                           "dashpot_mode",
-                           "limits_use_net_force"};
 
 const toml::table& as_table(const toml::node& n, const std::string& key, const std::string& what) {
   if (const toml::table* t = n.as_table()) return *t;
@@ -236,41 +223,14 @@ auto positive = [](double v) { return v > 0; };
 auto non_negative = [](double v) { return v >= 0; };
 
 ContactProperties read_contact(const toml::table& t, const std::string& path) {
-  check_keys(t, path, kContactKeys);
-  ContactProperties c;
-  if (const toml::node* n = t.get("model"))
-    c.model = contact_model_from_string(
-        as_string(*n, path + ".model", "\"linear\", \"rrlinear\" or \"arrlinear\""),
-        path + ".model");
-  const bool direct = t.get("normal_stiffness_N_per_m") || t.get("shear_stiffness_N_per_m");
-  if (direct) {
-    if (t.get("effective_modulus_Pa"))
-      fail(path + ".effective_modulus_Pa", *t.get("effective_modulus_Pa"),
-           "give either effective_modulus_Pa (+ stiffness_ratio) or normal_stiffness_N_per_m + "
-           "shear_stiffness_N_per_m, not both");
-    c.stiffness_method = StiffnessMethod::direct;
-  } else if (!t.get("effective_modulus_Pa")) {
+  // The keys and ranges of [contact.ball_ball] (scenario parser), complete:
+  // a stiffness must be given.
+  const ContactPatch patch = read_contact_patch(t, path);
+  if (!patch.effective_modulus_Pa && !patch.normal_stiffness_N_per_m)
     missing(path + ".effective_modulus_Pa",
             "the effective modulus E* > 0 [Pa] (or normal_stiffness_N_per_m and "
             "shear_stiffness_N_per_m)");
-  }
-  opt_number(t, path, "effective_modulus_Pa", c.effective_modulus_Pa, positive, "> 0 [Pa]");
-  opt_number(t, path, "stiffness_ratio", c.stiffness_ratio, positive, "kappa* = kn/ks > 0 [-]");
-  opt_number(t, path, "normal_stiffness_N_per_m", c.normal_stiffness_N_per_m, positive,
-             "> 0 [N/m]");
-  opt_number(t, path, "shear_stiffness_N_per_m", c.shear_stiffness_N_per_m, non_negative,
-             ">= 0 [N/m]");
-  opt_number(t, path, "friction", c.friction, non_negative, ">= 0 [-]");
-  opt_number(t, path, "rolling_friction", c.rolling_friction, non_negative, ">= 0 [-]");
-  opt_number(t, path, "attraction_force_N", c.attraction_force_N, non_negative, ">= 0 [N]");
-  opt_number(t, path, "attraction_range_m", c.attraction_range_m, non_negative, ">= 0 [m]");
-  opt_number(t, path, "dashpot_normal_ratio", c.dashpot_normal_ratio, non_negative, ">= 0 [-]");
-  opt_number(t, path, "dashpot_shear_ratio", c.dashpot_shear_ratio, non_negative, ">= 0 [-]");
-  if (const toml::node* n = t.get("dashpot_mode"))
-    c.dashpot_mode = static_cast<int>(integer(
-        *n, path + ".dashpot_mode", [](long v) { return v >= 0 && v <= 3; }, "0, 1, 2 or 3"));
-  if (const toml::node* n = t.get("limits_use_net_force"))
-    c.limits_use_net_force = as_bool(*n, path + ".limits_use_net_force");
+  ContactProperties c = apply(patch, ContactProperties{});
   validate(c, path);
   return c;
 }

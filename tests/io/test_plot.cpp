@@ -29,8 +29,8 @@ fs::path temp_dir() {
 }
 
 struct Image {
-  std::unique_ptr<cairo_surface_t, decltype(&cairo_surface_destroy)> surface{nullptr,
-                                                                              &cairo_surface_destroy};
+  std::unique_ptr<cairo_surface_t, decltype(&cairo_surface_destroy)> surface{
+      nullptr, &cairo_surface_destroy};
   int width = 0, height = 0;
   explicit Image(const fs::path& path) {
     surface.reset(cairo_image_surface_create_from_png(path.c_str()));
@@ -236,7 +236,8 @@ TEST(LinePlotRender, DegenerateDataAndBadArguments) {
   fixed.y_range = AxisRange{-1, 1};
   fixed.add("out of range", {-5, 5, 15}, {0, 3, 0});
   EXPECT_NO_THROW(fixed.render((dir / "fixed.png").string(), 400, 300));
-  EXPECT_THROW(one.render((dir / "no_such_folder" / "x.png").string(), 400, 300), std::runtime_error);
+  EXPECT_THROW(one.render((dir / "no_such_folder" / "x.png").string(), 400, 300),
+               std::runtime_error);
   EXPECT_THROW(one.render((dir / "tiny.png").string(), 0, 300), std::invalid_argument);
   EXPECT_THROW(render_panels((dir / "none.png").string(), {}, 2), std::invalid_argument);
   std::error_code ec;

@@ -35,7 +35,9 @@ std::string scenario(const std::string& shear_body, const std::string& extra_top
   return extra_top + kSpecimen + kContact + "\n[shear]\n" + shear_body;
 }
 
-ShearScenario parse(const std::string& text) { return parse_shear_scenario(text, "test.toml", "."); }
+ShearScenario parse(const std::string& text) {
+  return parse_shear_scenario(text, "test.toml", ".");
+}
 
 // The InputError's message, or "" when parsing succeeds.
 std::string error_of(const std::string& text) {
@@ -208,8 +210,9 @@ TEST(ShearConfig, WrongTypesAndRangesAreRejected) {
                "shear.ball_wall.friction");
   EXPECT_ERROR(scenario("normal_stresses_Pa = [40e3]\nball_wall = { model = \"hertz\" }\n"),
                "shear.ball_wall.model");
-  EXPECT_ERROR(scenario("normal_stresses_Pa = [40e3]\nduring_shear = { attraction_force_N = -1 }\n"),
-               "shear.during_shear.attraction_force_N");
+  EXPECT_ERROR(
+      scenario("normal_stresses_Pa = [40e3]\nduring_shear = { attraction_force_N = -1 }\n"),
+      "shear.during_shear.attraction_force_N");
   EXPECT_ERROR(scenario("normal_stresses_Pa = [40e3]\nduring_shear = 0\n"), "shear.during_shear");
   EXPECT_ERROR(scenario("normal_stresses_Pa = [40e3]\nbox = { length_m = -1 }\n"),
                "shear.box.length_m");
