@@ -125,23 +125,14 @@ using tomlread::as_vec3;
 using tomlread::fail;
 using tomlread::join;
 using tomlread::missing;
+using tomlread::num;
 using tomlread::quote;
 using tomlread::show;
+using tomlread::vec;
 using tomlread::where;
 
 // A TOML float that reads back exactly (shortest round-trip, always with a
 // '.' or an exponent so that it stays a float).
-std::string num(double v) {
-  if (std::isnan(v)) return "nan";
-  if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
-  std::string s = fmt::format("{}", v);
-  if (s.find_first_of(".eE") == std::string::npos) s += ".0";
-  return s;
-}
-
-std::string vec(const Vec3& v) {
-  return fmt::format("[{}, {}, {}]", num(v.x), num(v.y), num(v.z));
-}
 
 std::string path_of(const std::string& table, std::string_view key) {
   return table.empty() ? std::string(key) : table + "." + std::string(key);
@@ -872,27 +863,6 @@ Scenario load_scenario(const std::string& path) {
 
 // ------------------------------------------------------------ TOML writing --
 
-namespace {
-
-void write_contact_lines(std::string& out, const ContactProperties& c) {
-  out += fmt::format("model = {}\n", quote(to_string(c.model)));
-  if (c.stiffness_method == StiffnessMethod::deformability) {
-    out += fmt::format("effective_modulus_Pa = {}\n", num(c.effective_modulus_Pa));
-    out += fmt::format("stiffness_ratio = {}\n", num(c.stiffness_ratio));
-  } else {
-    out += fmt::format("normal_stiffness_N_per_m = {}\n", num(c.normal_stiffness_N_per_m));
-    out += fmt::format("shear_stiffness_N_per_m = {}\n", num(c.shear_stiffness_N_per_m));
-  }
-  out += fmt::format("friction = {}\n", num(c.friction));
-  out += fmt::format("rolling_friction = {}\n", num(c.rolling_friction));
-  out += fmt::format("attraction_force_N = {}\n", num(c.attraction_force_N));
-  out += fmt::format("attraction_range_m = {}\n", num(c.attraction_range_m));
-  out += fmt::format("dashpot_normal_ratio = {}\n", num(c.dashpot_normal_ratio));
-  out += fmt::format("dashpot_shear_ratio = {}\n", num(c.dashpot_shear_ratio));
-  out += fmt::format("dashpot_mode = {}\n", c.dashpot_mode);
-  out += fmt::format("limits_use_net_force = {}\n", c.limits_use_net_force);
-}
-
 std::string inline_patch(const ContactPatch& p) {
   std::vector<std::string> kv;
   auto add = [&](const char* k, const std::optional<double>& v) {
@@ -915,6 +885,27 @@ std::string inline_patch(const ContactPatch& p) {
   std::string out = "{ ";
   for (std::size_t i = 0; i < kv.size(); ++i) out += (i ? ", " : "") + kv[i];
   return out + " }";
+}
+
+namespace {
+
+void write_contact_lines(std::string& out, const ContactProperties& c) {
+  out += fmt::format("model = {}\n", quote(to_string(c.model)));
+  if (c.stiffness_method == StiffnessMethod::deformability) {
+    out += fmt::format("effective_modulus_Pa = {}\n", num(c.effective_modulus_Pa));
+    out += fmt::format("stiffness_ratio = {}\n", num(c.stiffness_ratio));
+  } else {
+    out += fmt::format("normal_stiffness_N_per_m = {}\n", num(c.normal_stiffness_N_per_m));
+    out += fmt::format("shear_stiffness_N_per_m = {}\n", num(c.shear_stiffness_N_per_m));
+  }
+  out += fmt::format("friction = {}\n", num(c.friction));
+  out += fmt::format("rolling_friction = {}\n", num(c.rolling_friction));
+  out += fmt::format("attraction_force_N = {}\n", num(c.attraction_force_N));
+  out += fmt::format("attraction_range_m = {}\n", num(c.attraction_range_m));
+  out += fmt::format("dashpot_normal_ratio = {}\n", num(c.dashpot_normal_ratio));
+  out += fmt::format("dashpot_shear_ratio = {}\n", num(c.dashpot_shear_ratio));
+  out += fmt::format("dashpot_mode = {}\n", c.dashpot_mode);
+  out += fmt::format("limits_use_net_force = {}\n", c.limits_use_net_force);
 }
 
 std::string inline_gravity(const GravitySpec& g) {

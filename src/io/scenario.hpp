@@ -65,6 +65,8 @@ ContactProperties apply(const ContactPatch& patch, ContactProperties base);
 // Reads a contact-properties table (the keys of [contact.ball_ball]) at `path`,
 // validating every key; used by every section that takes contact properties.
 ContactPatch read_contact_patch(const toml::node& node, const std::string& path);
+// The keys a patch sets, as a TOML inline table (resolved scenario files).
+std::string inline_patch(const ContactPatch& patch);
 
 struct SimulationSpec {
   WorldSettings world;               // timestep_s 0 = "auto"

@@ -19,9 +19,11 @@ namespace {
 using Keys = tomlread::Keys;
 using tomlread::as_number;
 using tomlread::check_keys;
+using tomlread::contact_inline;
 using tomlread::fail;
 using tomlread::join;
 using tomlread::missing;
+using tomlread::num;
 using tomlread::show;
 using tomlread::where;
 
@@ -95,53 +97,6 @@ ContactProperties resolve(const ContactPatch& p, const ContactProperties& base,
   ContactProperties c = apply(p, base);
   validate(c, path);
   return c;
-}
-
-std::string num(double v) {
-  std::string s = fmt::format("{}", v);
-  if (s.find_first_of(".eEn") == std::string::npos) s += ".0"; // keep floats floats
-  return s;
-}
-
-std::string contact_inline(const ContactProperties& c) {
-  std::string o = fmt::format("{{ model = \"{}\"", to_string(c.model));
-  if (c.stiffness_method == StiffnessMethod::direct)
-    o += fmt::format(", normal_stiffness_N_per_m = {}, shear_stiffness_N_per_m = {}",
-                     num(c.normal_stiffness_N_per_m), num(c.shear_stiffness_N_per_m));
-  else
-    o += fmt::format(", effective_modulus_Pa = {}, stiffness_ratio = {}",
-                     num(c.effective_modulus_Pa), num(c.stiffness_ratio));
-  o += fmt::format(", friction = {}, rolling_friction = {}, attraction_force_N = {}, "
-                   "attraction_range_m = {}, dashpot_normal_ratio = {}, dashpot_shear_ratio = {}, "
-                   "dashpot_mode = {}, limits_use_net_force = {} }}",
-                   num(c.friction), num(c.rolling_friction), num(c.attraction_force_N),
-                   num(c.attraction_range_m), num(c.dashpot_normal_ratio),
-                   num(c.dashpot_shear_ratio), c.dashpot_mode, c.limits_use_net_force);
-  return o;
-}
-
-std::string patch_inline(const ContactPatch& p) {
-  std::vector<std::string> parts;
-  if (p.model) parts.push_back(fmt::format("model = \"{}\"", to_string(*p.model)));
-  auto add = [&](const char* k, const std::optional<double>& v) {
-    if (v) parts.push_back(fmt::format("{} = {}", k, num(*v)));
-  };
-  add("effective_modulus_Pa", p.effective_modulus_Pa);
-  add("stiffness_ratio", p.stiffness_ratio);
-  add("normal_stiffness_N_per_m", p.normal_stiffness_N_per_m);
-  add("shear_stiffness_N_per_m", p.shear_stiffness_N_per_m);
-  add("friction", p.friction);
-  add("rolling_friction", p.rolling_friction);
-  add("attraction_force_N", p.attraction_force_N);
-  add("attraction_range_m", p.attraction_range_m);
-  add("dashpot_normal_ratio", p.dashpot_normal_ratio);
-  add("dashpot_shear_ratio", p.dashpot_shear_ratio);
-  if (p.dashpot_mode) parts.push_back(fmt::format("dashpot_mode = {}", *p.dashpot_mode));
-  if (p.limits_use_net_force)
-    parts.push_back(fmt::format("limits_use_net_force = {}", *p.limits_use_net_force));
-  std::string o = "{";
-  for (std::size_t i = 0; i < parts.size(); ++i) o += (i ? ", " : " ") + parts[i];
-  return o + (parts.empty() ? "}" : " }");
 }
 
 } // namespace
@@ -357,7 +312,7 @@ std::string resolved_shear_toml(const ShearScenario& sc) {
   o += fmt::format("max_shear_displacement_m = {}\n", num(s.max_shear_displacement_m));
   o += fmt::format("strain = \"{}\"\n", s.strain == StrainDefinition::height ? "height" : "length");
   o += "ball_wall = " + contact_inline(s.ball_wall) + "\n";
-  o += "during_shear = " + patch_inline(sc.during_shear) + "\n";
+  o += "during_shear = " + inline_patch(sc.during_shear) + "\n";
   o += fmt::format("servo_gain_factor = {}\nservo_max_speed_m_per_s = {}\n",
                    num(s.servo_gain_factor), num(s.servo_max_speed_m_per_s));
   o += fmt::format("consolidation_ratio = {}\nconsolidation_stress_tolerance = {}\n",

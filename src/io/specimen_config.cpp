@@ -455,14 +455,9 @@ SpecimenSpec load_specimen(const std::string& path) {
 // ------------------------------------------------------------ TOML writing --
 
 namespace {
-std::string num(double v) {
-  std::string s = fmt::format("{}", v);
-  if (s.find_first_of(".eEn") == std::string::npos) s += ".0";
-  return s;
-}
-std::string vec(const Vec3& v) {
-  return fmt::format("[{}, {}, {}]", num(v.x), num(v.y), num(v.z));
-}
+using tomlread::contact_inline;
+using tomlread::num;
+using tomlread::vec;
 // Absolute, so that the resolved table reads back from any folder.
 std::string abs_path(const std::string& p) {
   std::error_code ec;
@@ -473,23 +468,6 @@ std::string qt(const std::string& s) {
   std::string out = "\"";
   for (char c : s) out += (c == '"' || c == '\\') ? std::string("\\") + c : std::string(1, c);
   return out + "\"";
-}
-std::string contact_inline(const ContactProperties& c) {
-  std::string out = fmt::format("{{ model = {}", qt(std::string(to_string(c.model))));
-  if (c.stiffness_method == StiffnessMethod::deformability)
-    out += fmt::format(", effective_modulus_Pa = {}, stiffness_ratio = {}",
-                       num(c.effective_modulus_Pa), num(c.stiffness_ratio));
-  else
-    out += fmt::format(", normal_stiffness_N_per_m = {}, shear_stiffness_N_per_m = {}",
-                       num(c.normal_stiffness_N_per_m), num(c.shear_stiffness_N_per_m));
-  out += fmt::format(", friction = {}, rolling_friction = {}, attraction_force_N = {}, "
-                     "attraction_range_m = {}, dashpot_normal_ratio = {}, dashpot_shear_ratio = "
-                     "{}, dashpot_mode = {}, limits_use_net_force = {} }}",
-                     num(c.friction), num(c.rolling_friction), num(c.attraction_force_N),
-                     num(c.attraction_range_m), num(c.dashpot_normal_ratio),
-                     num(c.dashpot_shear_ratio), c.dashpot_mode,
-                     c.limits_use_net_force ? "true" : "false");
-  return out;
 }
 } // namespace
 

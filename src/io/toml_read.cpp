@@ -134,4 +134,33 @@ void check_keys(const toml::table& t, const std::string& path, const Keys& allow
   }
 }
 
+std::string num(double v) {
+  if (std::isnan(v)) return "nan";
+  if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
+  std::string s = fmt::format("{}", v);
+  if (s.find_first_of(".eE") == std::string::npos) s += ".0";
+  return s;
+}
+
+std::string vec(const Vec3& v) {
+  return fmt::format("[{}, {}, {}]", num(v.x), num(v.y), num(v.z));
+}
+
+std::string contact_inline(const ContactProperties& c) {
+  std::string o = fmt::format("{{ model = \"{}\"", to_string(c.model));
+  if (c.stiffness_method == StiffnessMethod::direct)
+    o += fmt::format(", normal_stiffness_N_per_m = {}, shear_stiffness_N_per_m = {}",
+                     num(c.normal_stiffness_N_per_m), num(c.shear_stiffness_N_per_m));
+  else
+    o += fmt::format(", effective_modulus_Pa = {}, stiffness_ratio = {}",
+                     num(c.effective_modulus_Pa), num(c.stiffness_ratio));
+  o += fmt::format(", friction = {}, rolling_friction = {}, attraction_force_N = {}, "
+                   "attraction_range_m = {}, dashpot_normal_ratio = {}, dashpot_shear_ratio = {}, "
+                   "dashpot_mode = {}, limits_use_net_force = {} }}",
+                   num(c.friction), num(c.rolling_friction), num(c.attraction_force_N),
+                   num(c.attraction_range_m), num(c.dashpot_normal_ratio),
+                   num(c.dashpot_shear_ratio), c.dashpot_mode, c.limits_use_net_force);
+  return o;
+}
+
 } // namespace centridem::tomlread

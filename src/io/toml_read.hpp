@@ -5,6 +5,7 @@
 #pragma once
 
 #include "core/vec3.hpp"
+#include "physics/contact_properties.hpp"
 
 #include <functional>
 #include <string>
@@ -30,5 +31,11 @@ double as_number(const toml::node& n, const std::string& key, const std::string&
 bool as_bool(const toml::node& n, const std::string& key);
 std::string as_string(const toml::node& n, const std::string& key, const std::string& allowed);
 Vec3 as_vec3(const toml::node& n, const std::string& key, const std::string& allowed);
+
+// Writing resolved tables: a float that reads back exactly and stays a float,
+// a 3-vector, and complete contact properties as an inline table.
+std::string num(double v);
+std::string vec(const Vec3& v);
+std::string contact_inline(const ContactProperties& c);
 
 } // namespace centridem::tomlread
