@@ -2,6 +2,7 @@
 // unstable, 1 any other failure.
 #include "app/cmd_generate.hpp"
 #include "app/cmd_shear.hpp"
+#include "app/cmd_slope.hpp"
 #include "core/errors.hpp"
 #include "io/scenario.hpp"
 #include "procedures/bench.hpp"
@@ -65,6 +66,7 @@ int main(int argc, char** argv) {
   RunCommand run;
   add_generate_subcommand(app); // runs itself from its callback
   add_shear_subcommand(app);    // likewise
+  add_slope_subcommand(app);    // likewise
 
   auto* cmd_run = app.add_subcommand(
       "run", "run a staged scenario: particles, walls, gravity, stages of cycling "

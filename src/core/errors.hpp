@@ -1,5 +1,6 @@
 // Error types that reach the user. The command-line layer maps InputError to
-// exit code 2 and InstabilityError to exit code 3 (see docs/ARCHITECTURE.md).
+// exit code 2, InstabilityError to exit code 3 and Interrupted to 128 + the
+// signal (see docs/ARCHITECTURE.md).
 #pragma once
 
 #include <stdexcept>
@@ -26,6 +27,19 @@ private:
 class InstabilityError : public std::runtime_error {
 public:
   using std::runtime_error::runtime_error;
+};
+
+// A run stopped on request (SIGINT, SIGTERM) after writing a checkpoint. The
+// command-line layer exits with 128 + signal (130 for SIGINT, 143 for
+// SIGTERM) and prints how to resume.
+class Interrupted : public std::runtime_error {
+public:
+  Interrupted(int signal, const std::string& message)
+      : std::runtime_error(message), signal_(signal) {}
+  int signal() const { return signal_; }
+
+private:
+  int signal_;
 };
 
 } // namespace centridem

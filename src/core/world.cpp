@@ -792,7 +792,6 @@ double World::critical_timestep() {
   const auto& r = p_.radius;
   const auto& m = p_.mass;
   const auto& I = p_.inertia;
-  const auto& x = p_.position;
   const ContactProperties& def = props_[ball_ball_default_];
   // Per contact, an upper bound of its contribution to the squared highest
   // frequency seen by one particle (column sum of the Gershgorin bound of

@@ -14,16 +14,16 @@
 
 namespace centridem {
 
-namespace {
-
-constexpr char kMagic[8] = {'C', 'D', 'E', 'M', 'C', 'K', 'P', 'T'};
-
-// FNV-1a, 64 bit: detects flipped bytes and truncation (with the stored length).
-std::uint64_t fnv1a(const std::string& data) {
+std::uint64_t fnv1a(std::string_view data) {
   std::uint64_t h = 1469598103934665603ull;
   for (unsigned char c : data) h = (h ^ c) * 1099511628211ull;
   return h;
 }
+
+namespace {
+
+constexpr char kMagic[8] = {'C', 'D', 'E', 'M', 'C', 'K', 'P', 'T'};
+
 
 class Writer {
 public:

@@ -10,13 +10,19 @@
 // particle order and neighbour lists.
 #pragma once
 
+#include <cstdint>
 #include <string>
+#include <string_view>
 
 namespace centridem {
 
 class World;
 
 inline constexpr unsigned kCheckpointVersion = 1;
+
+// FNV-1a, 64 bit: the checkpoint checksum (detects flipped bytes; with the
+// stored length, truncation); also a cache key for recipes.
+std::uint64_t fnv1a(std::string_view data);
 
 // Writes `world` (and `procedure_state`, any bytes) to `path` atomically.
 // Requests a rebuild of `world` (see above).

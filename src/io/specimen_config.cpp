@@ -284,7 +284,7 @@ RelaxSpec read_relax(const toml::node& node, const toml::table& root) {
 } // namespace
 
 SpecimenSpec parse_specimen(std::string_view text, const std::string& source_name,
-                            const std::string& base_dir) {
+                            const std::string& base_dir, const std::optional<Box>& default_region) {
   toml::table root;
   try {
     root = toml::parse(text, source_name.empty() ? std::string_view("<scenario>")
@@ -327,6 +327,8 @@ SpecimenSpec parse_specimen(std::string_view text, const std::string& source_nam
       if (!(b.hi[a] > b.lo[a]))
         fail(k + ".hi_m", *hi, fmt::format("must exceed lo_m along {} [m]", "xyz"[a]));
     s.region = b;
+  } else {
+    s.region = default_region;
   }
 
   if (const toml::node* n = t.get("file")) {

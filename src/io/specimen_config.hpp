@@ -115,8 +115,10 @@ struct SpecimenSpec {
 // [contact.ball_ball] table) from a scenario's TOML text. Other top-level
 // tables are left to the scenario parser. Reads the sieve CSV (relative to
 // base_dir). Throws InputError.
+// `default_region` fills a missing specimen.region (the slope's box).
 SpecimenSpec parse_specimen(std::string_view toml_text, const std::string& source_name,
-                            const std::string& base_dir);
+                            const std::string& base_dir,
+                            const std::optional<Box>& default_region = std::nullopt);
 SpecimenSpec load_specimen(const std::string& scenario_path);
 
 // The specimen as TOML (every default explicit), for the run folder.

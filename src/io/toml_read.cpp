@@ -117,6 +117,24 @@ Vec3 as_vec3(const toml::node& n, const std::string& key, const std::string& all
   return v;
 }
 
+long as_integer(const toml::node& n, const std::string& key, const std::string& allowed) {
+  if (auto i = n.as_integer()) return static_cast<long>(i->get());
+  if (auto f = n.as_floating_point()) { // 1e5 is a float in TOML; accept whole numbers
+    const double v = f->get();
+    if (std::isfinite(v) && v == std::floor(v) && std::abs(v) < 9e15) return static_cast<long>(v);
+  }
+  fail(key, n, "expected a whole number; " + allowed);
+}
+
+const toml::table& as_table(const toml::node& n, const std::string& key, const std::string& what) {
+  if (const toml::table* t = n.as_table()) return *t;
+  fail(key, n, "expected a table: " + what);
+}
+
+std::string path_of(const std::string& table, std::string_view key) {
+  return table.empty() ? std::string(key) : table + "." + std::string(key);
+}
+
 void check_keys(const toml::table& t, const std::string& path, const Keys& allowed,
                 const std::function<std::string(std::string_view)>& hint) {
   for (auto&& [k, v] : t) {

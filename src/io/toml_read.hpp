@@ -8,6 +8,7 @@
 #include "physics/contact_properties.hpp"
 
 #include <functional>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <toml++/toml.h>
@@ -31,6 +32,32 @@ double as_number(const toml::node& n, const std::string& key, const std::string&
 bool as_bool(const toml::node& n, const std::string& key);
 std::string as_string(const toml::node& n, const std::string& key, const std::string& allowed);
 Vec3 as_vec3(const toml::node& n, const std::string& key, const std::string& allowed);
+// A whole number (an integer, or a float such as 1e5 with no fraction).
+long as_integer(const toml::node& n, const std::string& key, const std::string& allowed);
+const toml::table& as_table(const toml::node& n, const std::string& key, const std::string& what);
+std::string path_of(const std::string& table, std::string_view key); // "table.key" or "key"
+
+// t[k] when present, checked with ok(value); the key in messages is path.k.
+template <class Ok>
+std::optional<double> opt_number(const toml::table& t, const std::string& path, std::string_view k,
+                                 Ok ok, const std::string& allowed) {
+  const toml::node* n = t.get(k);
+  if (!n) return std::nullopt;
+  const std::string key = path_of(path, k);
+  const double v = as_number(*n, key, allowed);
+  if (!ok(v)) fail(key, *n, allowed);
+  return v;
+}
+template <class Ok>
+std::optional<long> opt_integer(const toml::table& t, const std::string& path, std::string_view k,
+                                Ok ok, const std::string& allowed) {
+  const toml::node* n = t.get(k);
+  if (!n) return std::nullopt;
+  const std::string key = path_of(path, k);
+  const long v = as_integer(*n, key, allowed);
+  if (!ok(v)) fail(key, *n, allowed);
+  return v;
+}
 
 // Writing resolved tables: a float that reads back exactly and stays a float,
 // a 3-vector, and complete contact properties as an inline table.

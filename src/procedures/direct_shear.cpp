@@ -1,4 +1,5 @@
 #include "procedures/direct_shear.hpp"
+#include "procedures/specimen.hpp"
 
 #include "core/errors.hpp"
 
@@ -119,19 +120,7 @@ DirectShearResult run_direct_shear(World& w, const DirectShearSpec& s,
   // Fit the specimen into the box: centres inside the box leave spheres
   // poking through the walls; push them in with calm cycles (velocities
   // zeroed, PFC `calm`) under a tolerant overlap guard.
-  {
-    const double guard = w.settings().max_overlap_fraction;
-    w.set_max_overlap_fraction(std::max(guard, 3.0));
-    // At least one chunk: the walls' contacts exist only after a cycle.
-    for (long k = 0; k == 0 || (k < 2000 && w.measure().max_overlap_ratio > 0.05); ++k) {
-      w.cycle(10);
-      auto& P = w.particles_mut();
-      std::fill(P.velocity.begin(), P.velocity.end(), Vec3{});
-      std::fill(P.spin.begin(), P.spin.end(), Vec3{});
-      r.consolidation_steps += 10;
-    }
-    w.set_max_overlap_fraction(guard);
-  }
+  r.consolidation_steps += calm_into_walls(w);
 
   // Consolidation: upper box fixed, servo on the bottom wall.
   const long check = std::max<long>(100, s.record_interval_steps / 4);

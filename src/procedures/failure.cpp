@@ -379,4 +379,122 @@ nlohmann::json to_json(const FailureReport& r) {
   return j;
 }
 
+// ------------------------------------------------------------ checkpoints --
+
+namespace {
+nlohmann::json zone_json(const std::optional<ZoneId>& z) {
+  if (!z) return nullptr;
+  return {static_cast<int>(z->zone), z->bench};
+}
+std::optional<ZoneId> zone_from(const nlohmann::json& j) {
+  if (j.is_null()) return std::nullopt;
+  return ZoneId{static_cast<SlopeZone>(j.at(0).get<int>()), j.at(1).get<int>()};
+}
+std::optional<double> opt_from(const nlohmann::json& j) {
+  if (j.is_null()) return std::nullopt;
+  return j.get<double>();
+}
+} // namespace
+
+nlohmann::json FailureMonitor::save() const {
+  using nlohmann::json;
+  const FailureReport& r = report_;
+  json slip = json::array();
+  for (const SectionPoint& p : r.slip_surface) slip.push_back({p.x, p.z});
+  json report = {{"state", static_cast<int>(r.state)},
+                 {"settled", r.settled},
+                 {"checks", r.checks},
+                 {"time_s", r.time_s},
+                 {"ratio", r.unbalanced_force_ratio},
+                 {"d50_m", r.d50_m},
+                 {"gravity_m_s2", r.gravity_m_s2},
+                 {"threshold_m", r.displacement_threshold_m},
+                 {"moving_speed_m_s", r.moving_speed_m_s},
+                 {"slope_particles", r.slope_particles},
+                 {"slope_volume_m3", r.slope_volume_m3},
+                 {"onset_time_s", r.onset_time_s ? json(*r.onset_time_s) : json(nullptr)},
+                 {"start_zone", zone_json(r.start_zone)},
+                 {"sliding_mass", r.sliding_mass},
+                 {"particles", r.particles},
+                 {"volume_m3", r.volume_m3},
+                 {"particle_share", r.particle_share},
+                 {"volume_share", r.volume_share},
+                 {"mean_speed_m_s", r.mean_speed_m_s},
+                 {"mean_displacement_m", r.mean_displacement_m},
+                 {"max_displacement_m", r.max_displacement_m},
+                 {"benches_crossed", r.benches_crossed},
+                 {"source_benches", r.source_benches},
+                 {"particles_from_bench", r.particles_from_bench},
+                 {"slip", slip},
+                 {"front_x_m", r.front_x_m},
+                 {"runout_m", r.runout_m},
+                 {"runout_model_m", r.runout_model_m},
+                 {"largest_group", r.largest_group_particles},
+                 {"above_threshold", r.above_threshold}};
+  json history = json::array();
+  for (const FailureCheck& c : history_)
+    history.push_back({c.time_s, c.above_threshold, c.mass_particles, c.mass_mean_speed_m_s,
+                       c.unbalanced_force_ratio, c.significant, c.moving});
+  json first = json::array();
+  for (const auto& [id, check] : first_check_above_) first.push_back({id, check});
+  return {{"report", report},
+          {"history", history},
+          {"first_check_above", first},
+          {"moving_streak", moving_streak_},
+          {"stable_streak", stable_streak_},
+          {"settled_streak", settled_streak_},
+          {"streak_start_time_s",
+           streak_start_time_ ? json(*streak_start_time_) : json(nullptr)},
+          {"streak_start_zone", zone_json(streak_start_zone_)},
+          {"previous_group", previous_group_}};
+}
+
+void FailureMonitor::restore(const nlohmann::json& j) {
+  const nlohmann::json& q = j.at("report");
+  FailureReport r;
+  r.state = static_cast<SlopeState>(q.at("state").get<int>());
+  r.settled = q.at("settled");
+  r.checks = q.at("checks");
+  r.time_s = q.at("time_s");
+  r.unbalanced_force_ratio = q.at("ratio");
+  r.d50_m = q.at("d50_m");
+  r.gravity_m_s2 = q.at("gravity_m_s2");
+  r.displacement_threshold_m = q.at("threshold_m");
+  r.moving_speed_m_s = q.at("moving_speed_m_s");
+  r.slope_particles = q.at("slope_particles");
+  r.slope_volume_m3 = q.at("slope_volume_m3");
+  r.onset_time_s = opt_from(q.at("onset_time_s"));
+  r.start_zone = zone_from(q.at("start_zone"));
+  r.sliding_mass = q.at("sliding_mass");
+  r.particles = q.at("particles");
+  r.volume_m3 = q.at("volume_m3");
+  r.particle_share = q.at("particle_share");
+  r.volume_share = q.at("volume_share");
+  r.mean_speed_m_s = q.at("mean_speed_m_s");
+  r.mean_displacement_m = q.at("mean_displacement_m");
+  r.max_displacement_m = q.at("max_displacement_m");
+  r.benches_crossed = q.at("benches_crossed").get<std::vector<int>>();
+  r.source_benches = q.at("source_benches").get<std::vector<int>>();
+  r.particles_from_bench = q.at("particles_from_bench").get<std::vector<std::size_t>>();
+  for (const auto& p : q.at("slip")) r.slip_surface.push_back({p.at(0), p.at(1)});
+  r.front_x_m = q.at("front_x_m");
+  r.runout_m = q.at("runout_m");
+  r.runout_model_m = q.at("runout_model_m");
+  r.largest_group_particles = q.at("largest_group");
+  r.above_threshold = q.at("above_threshold");
+  report_ = std::move(r);
+  history_.clear();
+  for (const auto& c : j.at("history"))
+    history_.push_back({c.at(0), c.at(1), c.at(2), c.at(3), c.at(4), c.at(5), c.at(6)});
+  first_check_above_.clear();
+  for (const auto& e : j.at("first_check_above"))
+    first_check_above_.emplace(e.at(0).get<std::int64_t>(), e.at(1).get<int>());
+  moving_streak_ = j.at("moving_streak");
+  stable_streak_ = j.at("stable_streak");
+  settled_streak_ = j.at("settled_streak");
+  streak_start_time_ = opt_from(j.at("streak_start_time_s"));
+  streak_start_zone_ = zone_from(j.at("streak_start_zone"));
+  previous_group_ = j.at("previous_group");
+}
+
 } // namespace centridem

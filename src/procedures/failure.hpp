@@ -183,6 +183,12 @@ public:
   const SlopeGeometry& geometry() const { return geometry_; }
   const FailureCriteria& criteria() const { return criteria_; }
 
+  // The monitor's whole state (report, history, streaks, first crossings) for
+  // checkpoints; restore() on a monitor made with the same geometry and
+  // criteria continues exactly where save() was taken (doubles round-trip).
+  nlohmann::json save() const;
+  void restore(const nlohmann::json& state);
+
 private:
   void describe_mass(const World& world, const SlidingMass& mass, double mean_speed);
   ZoneId start_zone(const World& world, const SlidingMass& mass) const;

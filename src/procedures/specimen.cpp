@@ -754,4 +754,20 @@ void write_specimen_outputs(const World& world, const BuiltSpecimen& built,
   if (built.brick) write_brick(*built.brick, (d / "brick.json").string());
 }
 
+long calm_into_walls(World& w) {
+  const double guard = w.settings().max_overlap_fraction;
+  w.set_max_overlap_fraction(std::max(guard, 3.0));
+  long steps = 0;
+  // At least one chunk: the walls' contacts exist only after a cycle.
+  for (long k = 0; k == 0 || (k < 2000 && w.measure().max_overlap_ratio > 0.05); ++k) {
+    w.cycle(10);
+    auto& P = w.particles_mut();
+    std::fill(P.velocity.begin(), P.velocity.end(), Vec3{});
+    std::fill(P.spin.begin(), P.spin.end(), Vec3{});
+    steps += 10;
+  }
+  w.set_max_overlap_fraction(guard);
+  return steps;
+}
+
 } // namespace centridem

@@ -175,6 +175,13 @@ struct BuiltSpecimen {
 BuiltSpecimen build_specimen(const SpecimenSpec& spec, World& world, const SpecimenLog& log = {},
                              int threads = 0);
 
+// Fits a specimen into walls built around its region: centres inside the
+// region leave spheres poking through the walls; calm cycles (10 steps, then
+// velocities and spins zeroed, PFC `calm`) under a tolerant overlap guard
+// push them in until the largest overlap is below 5 % of the smaller radius
+// (at most 20,000 steps). Returns the steps taken.
+long calm_into_walls(World& world);
+
 // Writes the specimen's files into `dir` (created): specimen.vtu (ParaView),
 // specimen.xyzr (x y z r per line, SI), specimen.json (the report),
 // specimen.toml (the resolved [specimen] table) and brick.json (when a

@@ -1,0 +1,579 @@
+#include "app/cmd_slope.hpp"
+
+#include "app/jobs.hpp"
+#include "core/errors.hpp"
+#include "core/interrupt.hpp"
+#include "io/output.hpp"
+#include "io/plot.hpp"
+#include "io/slope_config.hpp"
+#include "procedures/slope_trial.hpp"
+
+#include <CLI/CLI.hpp>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fmt/format.h>
+#include <fstream>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+namespace centridem {
+
+namespace fs = std::filesystem;
+using json = nlohmann::json;
+using Clock = std::chrono::steady_clock;
+
+namespace {
+
+double seconds_since(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+std::string g_label(double g) {
+  return fmt::format("{:g}", g);
+}
+
+std::string format_duration(double s) {
+  if (!std::isfinite(s) || s < 0) return "?";
+  if (s < 120) return fmt::format("{:.0f} s", s);
+  if (s < 7200) return fmt::format("{:.1f} min", s / 60);
+  return fmt::format("{:.1f} h", s / 3600);
+}
+
+json read_json(const fs::path& p) {
+  std::ifstream in(p);
+  if (!in) throw std::runtime_error("cannot read " + p.string());
+  return json::parse(in);
+}
+
+// What the run folder remembers besides the scenario: the effective campaign
+// (after command-line overrides) and the settings that must not change on
+// --resume.
+struct Campaign {
+  CampaignSpec spec;
+  int threads = 1;
+  std::string cache_dir;
+};
+
+json campaign_json(const Campaign& c) {
+  const char* kind = c.spec.kind == CampaignKind::list     ? "list"
+                     : c.spec.kind == CampaignKind::search ? "search"
+                                                           : "schedule";
+  return {{"kind", kind},
+          {"g_levels", c.spec.g_levels},
+          {"stable_g", c.spec.stable_g},
+          {"failed_g", c.spec.failed_g},
+          {"tolerance_g", c.spec.tolerance_g},
+          {"step_g", c.spec.step_g},
+          {"max_g", c.spec.max_g},
+          {"max_slides", c.spec.max_slides},
+          {"jobs", c.spec.jobs},
+          {"threads", c.threads},
+          {"cache_dir", c.cache_dir}};
+}
+
+Campaign campaign_from(const json& j, const std::string& path) {
+  try {
+    Campaign c;
+    const std::string kind = j.at("kind");
+    c.spec.kind = kind == "list"     ? CampaignKind::list
+                  : kind == "search" ? CampaignKind::search
+                                     : CampaignKind::schedule;
+    c.spec.g_levels = j.at("g_levels").get<std::vector<double>>();
+    c.spec.stable_g = j.at("stable_g");
+    c.spec.failed_g = j.at("failed_g");
+    c.spec.tolerance_g = j.at("tolerance_g");
+    c.spec.step_g = j.at("step_g");
+    c.spec.max_g = j.at("max_g");
+    c.spec.max_slides = j.at("max_slides");
+    c.spec.jobs = j.at("jobs");
+    c.threads = j.at("threads");
+    c.cache_dir = j.at("cache_dir");
+    return c;
+  } catch (const json::exception& e) {
+    throw InputError(fmt::format("{}: unreadable campaign record ({})", path, e.what()));
+  }
+}
+
+// The g-levels of a stepped schedule: the listed ones, then + step_g to max_g.
+std::vector<double> schedule_levels(const CampaignSpec& c) {
+  std::vector<double> g = c.g_levels;
+  for (double next = g.back() + c.step_g; next <= c.max_g + 1e-9; next += c.step_g)
+    g.push_back(next);
+  return g;
+}
+
+struct TrialOutcome {
+  double g = 0;
+  std::string dir; // relative to the run folder
+  json result;     // result.json; null when the trial did not finish
+  bool failed() const { return !result.is_null() && result.value("failed", false); }
+  bool done() const { return !result.is_null(); }
+};
+
+class SlopeCampaignRunner {
+public:
+  SlopeCampaignRunner(const SlopeScenario& sc, const Campaign& c, fs::path out,
+                      double progress_interval_s)
+      : sc_(sc), c_(c), out_(std::move(out)), progress_(progress_interval_s) {}
+
+  // Runs (or picks up the results of) trials at these g-levels, in parallel.
+  std::vector<TrialOutcome> run_levels(const std::vector<double>& gs) {
+    std::vector<int> rc = run_jobs(
+        gs.size(), c_.spec.jobs,
+        [&](std::size_t k) {
+          SlopeTrialPlan plan;
+          plan.g_levels = {gs[k]};
+          run_one(plan, trial_dir(gs[k]), g_label(gs[k]) + " g");
+        },
+        [&](std::size_t k) { return "trial at " + g_label(gs[k]) + " g"; });
+    record_codes(rc);
+    std::vector<TrialOutcome> out;
+    for (double g : gs) out.push_back(outcome(g, trial_dir(g)));
+    return out;
+  }
+
+  TrialOutcome run_schedule(const std::vector<double>& levels) {
+    SlopeTrialPlan plan;
+    plan.g_levels = levels;
+    plan.max_slides = c_.spec.max_slides;
+    std::vector<int> rc = run_jobs(
+        1, 1, [&](std::size_t) { run_one(plan, "schedule", "schedule"); },
+        [](std::size_t) { return std::string("schedule"); });
+    record_codes(rc);
+    return outcome(levels.front(), "schedule");
+  }
+
+  int worst_code() const { return worst_; }
+
+private:
+  static std::string trial_dir(double g) { return "trial_" + g_label(g) + "g"; }
+
+  void record_codes(const std::vector<int>& rc) {
+    for (int code : rc)
+      if (code > 0 && (worst_ == 0 || code > 128)) worst_ = code; // interruptions win
+  }
+
+  TrialOutcome outcome(double g, const std::string& dir) const {
+    TrialOutcome t;
+    t.g = g;
+    t.dir = dir;
+    const fs::path p = out_ / dir / "result.json";
+    if (fs::exists(p)) t.result = read_json(p);
+    return t;
+  }
+
+  void run_one(const SlopeTrialPlan& plan, const std::string& dir, const std::string& tag) const {
+    const fs::path d = out_ / dir;
+    if (fs::exists(d / "result.json")) return; // finished earlier (resume)
+    make_directories(d.string());
+    std::FILE* log = std::fopen((d / "log.txt").string().c_str(), "a");
+    const auto t0 = Clock::now();
+    SlopeTrialOptions o;
+    o.dir = d.string();
+    o.cache_dir = c_.cache_dir;
+    o.progress_interval_s = progress_;
+    o.threads = c_.threads;
+    o.log = [&](std::string_view line) {
+      const std::string s = fmt::format("[{:8.1f} s] {}: {}\n", seconds_since(t0), tag, line);
+      std::fputs(s.c_str(), stderr);
+      std::fflush(stderr);
+      if (log) {
+        std::fputs(s.c_str(), log);
+        std::fflush(log);
+      }
+    };
+    try {
+      run_slope_trial(sc_, plan, o);
+    } catch (...) {
+      if (log) std::fclose(log);
+      throw;
+    }
+    if (log) std::fclose(log);
+  }
+
+  const SlopeScenario& sc_;
+  Campaign c_;
+  fs::path out_;
+  double progress_;
+  int worst_ = 0;
+};
+
+// "1,2" from a JSON array of bench numbers.
+std::string bench_list(const json& a) {
+  std::string s;
+  for (const auto& b : a) {
+    if (!s.empty()) s += ',';
+    s += b.dump();
+  }
+  return s;
+}
+
+json trial_row(const TrialOutcome& t) {
+  json row = {{"g_level", t.g}, {"dir", t.dir}};
+  if (!t.done()) {
+    row["state"] = "not finished";
+    return row;
+  }
+  const json& r = t.result;
+  const json& lv = r.at("levels");
+  row["foundation_particles"] = r["foundation"]["particles"];
+  row["slope_particles"] = r["slope_particles"];
+  row["wall_seconds"] = r["wall_seconds"];
+  row["particle_steps_per_s"] = r["particle_steps_per_s"];
+  row["total_steps"] = r["total_steps"];
+  row["pictures"] = r["pictures"];
+  json levels = json::array();
+  for (const json& l : lv)
+    levels.push_back({{"g_level", l["g_level"]},
+                      {"state", l["state"]},
+                      {"time_limit", l["time_limit"]},
+                      {"level_time_s", l["level_time_s"]},
+                      {"onset_time_s", l["onset_time_s"]},
+                      {"start_zone", l["start_zone"]},
+                      {"particles", l["particles"]},
+                      {"volume_share", l["volume_share"]},
+                      {"benches_crossed", l["benches_crossed"]},
+                      {"source_benches", l["source_benches"]},
+                      {"runout_model_m", l["runout_model_m"]}});
+  row["levels"] = levels;
+  row["state"] = t.failed() ? "failed" : (lv.empty() ? "?" : lv.back()["state"]);
+  return row;
+}
+
+// One line of the summary table per level.
+std::string md_row(double g, const json& l, const std::string& picture) {
+  auto str = [](const json& v) {
+    if (v.is_null()) return std::string("–");
+    if (v.is_string()) return v.get<std::string>();
+    return v.dump();
+  };
+  const std::string benches = bench_list(l["benches_crossed"]);
+  const bool failed = l["state"] == "failed";
+  return fmt::format(
+      "| {:g} | {}{} | {} | {} | {} | {} | {} | {} |\n", g, str(l["state"]),
+      l.value("time_limit", false) ? " (time limit)" : "",
+      failed ? fmt::format("{:.4f}", l["onset_time_s"].get<double>()) : "–",
+      failed ? str(l["start_zone"]) : "–", failed ? str(l["particles"]) : "–",
+      failed ? fmt::format("{:.1f}", 100 * l["volume_share"].get<double>()) : "–",
+      failed ? (benches.empty() ? "–" : benches) : "–",
+      failed ? fmt::format("{:.1f}", 1e3 * l["runout_model_m"].get<double>()) : "–") +
+         (picture.empty() ? "" : "");
+}
+
+void write_plot(const SlopeScenario& sc, const std::vector<std::pair<double, json>>& levels,
+                const std::string& title_extra, const fs::path& png) {
+  LinePlot p;
+  p.title = (sc.name.empty() ? std::string("benched slope") : sc.name) + ": g-levels tried" +
+            title_extra;
+  p.x_label = "g-level n";
+  p.y_label = "sliding mass (% of the slope's volume)";
+  std::vector<double> gs, gf, gu, ys, yf, yu;
+  for (const auto& [g, l] : levels) {
+    const double share = 100 * l.value("volume_share", 0.0);
+    if (l["state"] == "failed")
+      gf.push_back(g), yf.push_back(share);
+    else if (l["state"] == "stable")
+      gs.push_back(g), ys.push_back(share);
+    else
+      gu.push_back(g), yu.push_back(share);
+  }
+  if (!gs.empty())
+    p.add("stable", gs, ys).markers_only(Marker::circle).with_colour({0.17, 0.63, 0.17});
+  if (!gf.empty())
+    p.add("failed", gf, yf).markers_only(Marker::cross).with_colour({0.84, 0.15, 0.16});
+  if (!gu.empty())
+    p.add("undecided (time limit)", gu, yu)
+        .markers_only(Marker::diamond)
+        .with_colour({0.5, 0.5, 0.5});
+  double gmin = 1e300, gmax = -1e300;
+  for (const auto& [g, l] : levels) gmin = std::min(gmin, g), gmax = std::max(gmax, g);
+  const double pad = std::max(2.0, 0.1 * (gmax - gmin));
+  p.x_range = AxisRange{std::max(0.0, gmin - pad), gmax + pad};
+  p.y_range = AxisRange{0, 100};
+  p.legend = LegendPlace::upper_left;
+  p.render(png.string(), 900, 600);
+}
+
+} // namespace
+
+int run_slope_command(const SlopeCommandOptions& opt) {
+  const auto t0 = Clock::now();
+  install_stop_handlers();
+  SlopeScenario sc;
+  Campaign camp;
+  fs::path out;
+  if (!opt.resume_dir.empty()) {
+    out = opt.resume_dir;
+    if (!opt.scenario.empty() || !opt.g_levels.empty() || !opt.search.empty() ||
+        !opt.out_dir.empty())
+      throw InputError("--resume", opt.resume_dir,
+                       "continues a run folder as it was started: give no scenario, --out, "
+                       "--g or --search with it");
+    if (!fs::exists(out / "scenario.toml") || !fs::exists(out / "campaign.json"))
+      throw InputError("--resume", opt.resume_dir,
+                       "not a slope run folder (scenario.toml and campaign.json missing)");
+    sc = load_slope_scenario((out / "scenario.toml").string());
+    camp = campaign_from(read_json(out / "campaign.json"), (out / "campaign.json").string());
+    if (opt.jobs > 0) camp.spec.jobs = opt.jobs; // the machine may have changed
+    fmt::print(stderr, "centridem slope: resuming {}\n", out.string());
+  } else {
+    if (opt.scenario.empty()) throw InputError("scenario", "(missing)", "a scenario file, or --resume RUN_DIR");
+    sc = load_slope_scenario(opt.scenario);
+    camp.spec = sc.campaign;
+    if (!opt.g_levels.empty() && !opt.search.empty())
+      throw InputError("--g", "given with --search", "one of them");
+    if (!opt.g_levels.empty()) {
+      camp.spec.kind = CampaignKind::list;
+      camp.spec.g_levels.clear();
+      for (double g : opt.g_levels) {
+        if (!(g > 0) || !std::isfinite(g) || g > 1e4)
+          throw InputError("--g", fmt::format("{:g}", g), "a g-level in (0, 10000]");
+        camp.spec.g_levels.push_back(g);
+      }
+    }
+    if (!opt.search.empty()) {
+      if (opt.search.size() != 2 || !(opt.search[0] > 0) || !(opt.search[1] > opt.search[0]))
+        throw InputError("--search", fmt::format("{}", fmt::join(opt.search, " ")),
+                         "two g-levels STABLE FAILED with 0 < STABLE < FAILED");
+      camp.spec.kind = CampaignKind::search;
+      camp.spec.stable_g = opt.search[0];
+      camp.spec.failed_g = opt.search[1];
+    }
+    if (opt.tolerance_g > 0) camp.spec.tolerance_g = opt.tolerance_g;
+    if (opt.jobs > 0) camp.spec.jobs = opt.jobs;
+    camp.threads = opt.threads >= 0 ? opt.threads : sc.trial.threads;
+    std::string o = opt.out_dir;
+    if (o.empty()) {
+      std::string stem = fs::path(opt.scenario).stem().string();
+      if (stem.empty()) stem = "scenario";
+      o = "runs/" + stem + "_slope";
+    }
+    out = o;
+    camp.cache_dir = opt.cache_dir.empty()
+                         ? (fs::absolute(out).parent_path() / "cache").lexically_normal().string()
+                         : fs::absolute(opt.cache_dir).string();
+    make_directories(out.string());
+    if (fs::exists(out / "campaign.json"))
+      throw InputError("--out", out.string(),
+                       "already holds a slope run: continue it with `centridem slope --resume " +
+                           out.string() + "`, or choose another folder");
+    replace_text_file((out / "scenario.toml").string(), resolved_slope_toml(sc));
+    replace_text_file((out / "campaign.json").string(), campaign_json(camp).dump(2) + "\n");
+  }
+  if (opt.threads >= 0) camp.threads = opt.threads;
+
+  const SlopeGeometry geometry(sc.slope);
+  SlopeCampaignRunner runner(sc, camp, out, opt.progress_interval_s);
+  const CampaignSpec& cs = camp.spec;
+  fmt::print(stderr,
+             "centridem slope: {} (s = {:g}; DEM box {:.2f} x {:.2f} x {:.2f} mm), {} job(s), {} "
+             "thread(s) per trial, output {}\n",
+             sc.name.empty() ? "benched slope" : sc.name, sc.slope.size_reduction_factor,
+             1e3 * geometry.length(), 1e3 * geometry.breadth(), 1e3 * geometry.height(), cs.jobs,
+             camp.threads == 0 ? std::string("default") : std::to_string(camp.threads),
+             out.string());
+
+  std::vector<TrialOutcome> trials;
+  json critical = nullptr;
+  std::string title_extra;
+  if (cs.kind == CampaignKind::list) {
+    fmt::print(stderr, "trials at {} g\n", fmt::join(cs.g_levels, ", "));
+    trials = runner.run_levels(cs.g_levels);
+  } else if (cs.kind == CampaignKind::search) {
+    // Bracketing search: confirm both ends, then split the bracket into
+    // jobs + 1 parts per round (bisection with one job).
+    double lo = cs.stable_g, hi = cs.failed_g;
+    fmt::print(stderr, "critical-g search in [{:g}, {:g}] g to {:g} g\n", lo, hi, cs.tolerance_g);
+    std::vector<TrialOutcome> ends = runner.run_levels({lo, hi});
+    trials = ends;
+    bool ok = runner.worst_code() == 0;
+    if (ok && ends[0].failed()) {
+      critical = {{"below_g", lo}, {"note", "the slope already fails at the lower end"}};
+      ok = false;
+    } else if (ok && !ends[1].failed()) {
+      critical = {{"above_g", hi}, {"note", "the slope does not fail at the upper end"}};
+      ok = false;
+    }
+    while (ok && hi - lo > cs.tolerance_g + 1e-9) {
+      const int parts = std::max(2, cs.jobs + 1);
+      std::vector<double> gs;
+      for (int k = 1; k < parts; ++k) {
+        // Levels rounded to 0.01 g, so folder names stay short.
+        const double g = std::round((lo + (hi - lo) * k / parts) * 100) / 100;
+        if (g > lo && g < hi) gs.push_back(g);
+      }
+      if (gs.empty()) break;
+      std::vector<TrialOutcome> round = runner.run_levels(gs);
+      if (runner.worst_code() != 0) {
+        ok = false;
+        break;
+      }
+      for (const TrialOutcome& t : round) {
+        trials.push_back(t);
+        if (t.failed())
+          hi = std::min(hi, t.g);
+        else
+          lo = std::max(lo, t.g);
+      }
+      // A non-monotonic answer (stable above a failure) narrows to the lowest failure.
+      for (const TrialOutcome& t : trials)
+        if (!t.failed() && t.g < hi) lo = std::max(lo, t.g);
+      fmt::print(stderr, "critical-g bracket now [{:g}, {:g}] g\n", lo, hi);
+    }
+    if (ok) critical = {{"stable_g", lo}, {"failed_g", hi}, {"estimate_g", 0.5 * (lo + hi)}};
+    std::sort(trials.begin(), trials.end(),
+              [](const TrialOutcome& a, const TrialOutcome& b) { return a.g < b.g; });
+  } else {
+    const std::vector<double> levels = schedule_levels(cs);
+    fmt::print(stderr, "stepped schedule: {} g (stop after {} slide(s))\n", fmt::join(levels, ", "),
+               cs.max_slides);
+    trials = {runner.run_schedule(levels)};
+  }
+
+  // Summary.
+  json rows = json::array();
+  std::vector<std::pair<double, json>> plotted;
+  std::string md = fmt::format("# {} — slope campaign\n\nScenario: `{}` (s = {:g}). Command: "
+                               "`centridem slope ...`; folder `{}`.\n\n",
+                               sc.name.empty() ? "benched slope" : sc.name, sc.source_path,
+                               sc.slope.size_reduction_factor, out.string());
+  md += "| g-level | state | onset (s) | starts at | particles sliding | volume % | benches "
+        "crossed | runout (model mm) |\n|---|---|---|---|---|---|---|---|\n";
+  std::vector<double> slide_g;
+  for (const TrialOutcome& t : trials) {
+    rows.push_back(trial_row(t));
+    if (!t.done()) {
+      md += fmt::format("| {:g} | not finished | | | | | | |\n", t.g);
+      continue;
+    }
+    for (const json& l : t.result["levels"]) {
+      const double g = l["g_level"];
+      plotted.emplace_back(g, l);
+      md += md_row(g, l, "");
+      if (l["state"] == "failed") slide_g.push_back(g);
+    }
+  }
+  if (cs.kind == CampaignKind::list) {
+    double lowest_failed = INFINITY, highest_stable = -INFINITY;
+    for (const auto& [g, l] : plotted)
+      if (l["state"] == "failed")
+        lowest_failed = std::min(lowest_failed, g);
+    for (const auto& [g, l] : plotted)
+      if (l["state"] != "failed" && g < lowest_failed) highest_stable = std::max(highest_stable, g);
+    if (std::isfinite(lowest_failed))
+      critical = {{"stable_g", std::isfinite(highest_stable) ? json(highest_stable) : json(nullptr)},
+                  {"failed_g", lowest_failed}};
+  }
+  if (cs.kind == CampaignKind::schedule && !slide_g.empty())
+    critical = {{"first_slide_g", slide_g.front()}, {"slides_g", slide_g}};
+  if (critical.is_object() && critical.contains("failed_g"))
+    title_extra = critical["stable_g"].is_null()
+                      ? fmt::format(" (fails at {:g} g)", critical["failed_g"].get<double>())
+                      : fmt::format(" (critical between {:g} and {:g} g)",
+                                    critical["stable_g"].get<double>(),
+                                    critical["failed_g"].get<double>());
+  else if (critical.is_object() && critical.contains("first_slide_g"))
+    title_extra = fmt::format(" (first slide at {:g} g)", critical["first_slide_g"].get<double>());
+  if (!plotted.empty()) write_plot(sc, plotted, title_extra, out / "g_levels.png");
+  md += "\nCritical g: " + (critical.is_null() ? std::string("not bracketed") : critical.dump()) +
+        "\n\nPictures: `<trial>/pictures/frame_NNNN.png`; ParaView: `<trial>/slope.pvd`; the "
+        "g-level plot: `g_levels.png`.\n";
+
+  json summary;
+  summary["scenario"] = sc.source_path;
+  summary["name"] = sc.name;
+  summary["campaign"] = campaign_json(camp);
+  summary["geometry"] = to_json(geometry);
+  summary["soil_contact_attraction_force_N"] = sc.soil().attraction_force_N;
+  summary["trials"] = rows;
+  summary["critical_g"] = critical;
+  summary["wall_seconds_this_process"] = seconds_since(t0);
+  replace_text_file((out / "summary.json").string(), summary.dump(2) + "\n");
+  replace_text_file((out / "summary.md").string(), md);
+
+  fmt::print("{:>8} {:>10} {:>10} {:>14} {:>9} {:>8} {:>8} {:>10}\n", "g-level", "state",
+             "onset_s", "start", "sliding", "vol_%", "benches", "wall");
+  for (const TrialOutcome& t : trials) {
+    if (!t.done()) {
+      fmt::print("{:>8g} {:>10}\n", t.g, "unfinished");
+      continue;
+    }
+    for (const json& l : t.result["levels"]) {
+      const bool failed = l["state"] == "failed";
+      const std::string benches = bench_list(l["benches_crossed"]);
+      fmt::print("{:>8g} {:>10} {:>10} {:>14} {:>9} {:>8} {:>8} {:>10}\n",
+                 l["g_level"].get<double>(), l["state"].get<std::string>(),
+                 failed ? fmt::format("{:.4f}", l["onset_time_s"].get<double>()) : "-",
+                 failed ? l["start_zone"].get<std::string>() : "-",
+                 failed ? l["particles"].dump() : "-",
+                 failed ? fmt::format("{:.1f}", 100 * l["volume_share"].get<double>()) : "-",
+                 failed ? benches : "-",
+                 format_duration(t.result["wall_seconds"].get<double>()));
+    }
+  }
+  if (!critical.is_null()) fmt::print("critical g: {}\n", critical.dump());
+  fmt::print("wrote {}: summary.md, summary.json, g_levels.png; pictures in <trial>/pictures/, "
+             "ParaView series <trial>/slope.pvd ({})\n",
+             out.string(), format_duration(seconds_since(t0)));
+  std::fflush(stdout);
+  const int worst = runner.worst_code();
+  if (worst > 128)
+    fmt::print(stderr, "centridem slope: interrupted; continue with `centridem slope --resume {}`\n",
+               out.string());
+  if (stop_signal() && worst == 0) return 128 + stop_signal();
+  return worst;
+}
+
+CLI::App* add_slope_subcommand(CLI::App& app) {
+  auto o = std::make_shared<SlopeCommandOptions>();
+  CLI::App* cmd = app.add_subcommand(
+      "slope", "benched slope in the centrifuge: trials at g-levels, a critical-g search or a "
+               "stepped g schedule (docs/slope.md)");
+  cmd->add_option("scenario", o->scenario,
+                  "scenario file (TOML) with [specimen], [contact.ball_ball], [slope] and "
+                  "[campaign]");
+  cmd->add_option("--out", o->out_dir, "output folder (default: runs/<scenario stem>_slope)");
+  cmd->add_option("--resume", o->resume_dir,
+                  "continue the run in this folder from its trials' last checkpoints");
+  cmd->add_option("--g", o->g_levels,
+                  "run independent trials at these g-levels instead of the campaign "
+                  "(repeatable)");
+  cmd->add_option("--search", o->search,
+                  "bracketing search for the critical g between STABLE and FAILED")
+      ->expected(2);
+  cmd->add_option("--tolerance", o->tolerance_g, "search: stop when the bracket is this narrow [g]")
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--jobs", o->jobs, "trials at once, as child processes (default: campaign.jobs)")
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--threads", o->threads,
+                  "OpenMP threads per trial (default: trial.threads; 0 = the OpenMP default)")
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--cache", o->cache_dir,
+                  "folder of cached bricks (default: cache/ beside the output folder)");
+  cmd->add_option("--progress", o->progress_interval_s, "seconds between progress lines")
+      ->check(CLI::PositiveNumber);
+  cmd->callback([o]() {
+    int rc = 0;
+    try {
+      rc = run_slope_command(*o);
+    } catch (...) {
+      rc = report_current_exception("");
+      if (rc > 128)
+        fmt::print(stderr, "centridem slope: continue with `centridem slope --resume {}`\n",
+                   o->resume_dir.empty() ? (o->out_dir.empty() ? "RUN_DIR" : o->out_dir)
+                                         : o->resume_dir);
+    }
+    if (rc != 0) {
+      std::fflush(stdout);
+      std::fflush(stderr);
+      std::exit(rc);
+    }
+  });
+  return cmd;
+}
+
+} // namespace centridem

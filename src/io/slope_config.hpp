@@ -1,0 +1,138 @@
+// Benched slope scenarios (`centridem slope SCENARIO.toml`, docs/slope.md):
+//   [specimen]           the foundation (docs/specimens.md); its region may be
+//                        left out: it is then the slope's DEM box
+//   [contact.ball_ball]  the soil's contact properties (Table 1); F0 as
+//                        calibrated in the laboratory (divided by s in the
+//                        slope when slope.attraction_divided_by_s)
+//   [slope]              the geometry (BenchedSlope keys, model scale) and
+//                        the chamber walls
+//   [field]              uniform n g / s, or a true radial centrifuge field
+//   [moisture]           optional: F0 graded with height (drier crest)
+//   [trial]              one trial's stages and limits
+//   [failure]            failure detection (FailureCriteria keys)
+//   [campaign]           g-levels, a critical-g search or a stepped schedule
+//   [output]             pictures and ParaView frames
+// Reading validates every key (type, range, unknown keys with a did-you-mean
+// suggestion) and throws InputError naming the dotted key, the value and what
+// is allowed. The result is fully resolved: every default is explicit.
+#pragma once
+
+#include "io/scenario.hpp"
+#include "io/specimen_config.hpp"
+#include "physics/contact_properties.hpp"
+#include "procedures/failure.hpp"
+#include "procedures/slope_geometry.hpp"
+
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace centridem {
+
+// The chamber's walls: floor, back wall and the two side walls (glass) with
+// the chamber's friction; the end of the model (the middle of the chamber,
+// where the mirror-image slope would be) as a frictionless symmetry wall.
+struct ChamberWalls {
+  ContactProperties chamber;   // `slope.walls.chamber`: patch over Table 1's ball-wall, mu = 0.2
+  bool end_wall = true;        // `slope.walls.end_wall`: a wall at x = length
+  ContactProperties end;       // `slope.walls.end`: patch over the same, mu = 0 (symmetry)
+};
+
+enum class FieldKind { uniform, centrifuge };
+
+// The body field of a trial at g-level n (physics/body_field.hpp).
+struct FieldSpec {
+  FieldKind kind = FieldKind::uniform; // `field.kind`: "uniform" (n g / s down) or "centrifuge"
+  // centrifuge: radius of the model's base (the chamber floor) from the axis
+  // [m, real scale]. The paper does not give it: 2.5 m (REFERENCE.md).
+  double base_radius_m = 2.5;
+  // Radius at which the g-level is n [m, real scale]; 0 = the base radius.
+  double reference_radius_m = 0.0;
+  // Rotation axis: "y" (the section x-z is the plane of rotation, the field
+  // fans out along the section) or "x" (it fans out across the breadth).
+  char axis = 'y';
+  bool coriolis = false; // add -2 omega x v
+};
+
+// Moisture-graded adhesion: every contact that exists at the cut gets
+// F0 x factor(z), the factor linear in the height of the contact above the
+// floor, from `bottom_factor` at z = 0 to `top_factor` at the crest (z = H),
+// applied in `bands` horizontal bands. In the centrifuge the water drains
+// downwards, so the crest is drier (less suction, less adhesion).
+struct MoistureSpec {
+  bool enabled = false;
+  double top_factor = 1.0;    // `moisture.top_factor` [-] (>= 0)
+  double bottom_factor = 1.0; // `moisture.bottom_factor` [-] (>= 0)
+  int bands = 10;             // `moisture.bands` (1 .. 1000)
+};
+
+struct TrialSpec {
+  double local_damping = 0.7;         // Cundall local damping (Table 1) [-]
+  double equilibrium_ratio = 1e-4;    // foundation: mean unbalanced-force ratio [-]
+  long foundation_max_steps = 400000; // step limit of the foundation's equilibrium
+  long check_interval_steps = 1000;   // steps between failure checks
+  double max_time_s = 0.15;           // trial time after the cut [s, DEM]
+  double after_failure_time_s = 0.05; // extra time to watch a slide after onset [s, DEM]
+  // Contact defaults for contacts made after the cut (patch over the soil's):
+  // mu_r = 0 and F0 = 0 (paper section 3.2).
+  ContactPatch after_cut;
+  int threads = 1;                     // OpenMP threads per trial (0 = OpenMP default)
+  double checkpoint_interval_min = 10; // wall-clock minutes between checkpoints (0 = none)
+  long checkpoint_interval_steps = 0;  // steps between checkpoints (0 = none)
+};
+
+enum class CampaignKind { list, search, schedule };
+
+struct CampaignSpec {
+  CampaignKind kind = CampaignKind::list;
+  std::vector<double> g_levels; // list: independent trials; schedule: the steps given
+  // search: bisection between a stable and a failing level
+  double stable_g = 0, failed_g = 0, tolerance_g = 2.5;
+  // schedule: after g_levels, + step_g until max_g
+  double step_g = 10, max_g = 100;
+  int max_slides = 3; // schedule: stop after this many slides
+  int jobs = 1;       // trials at once (child processes)
+};
+
+struct SlopeOutput {
+  double colour_min_m = 1.2e-4; // displacement colour range (log) [m]
+  double colour_max_m = 5e-3;
+  long frame_interval_steps = 100000; // pictures every N steps (paper: 1e5); 0 = start and end only
+  bool vtk = true;                    // ParaView series of the same frames
+  int picture_width_px = 1400;
+};
+
+struct SlopeScenario {
+  std::string source_path;
+  std::string base_dir;
+  std::string description;
+  std::string name; // `slope.name`: label on pictures ("lower first bench")
+  SpecimenSpec specimen;
+  ContactProperties ball_ball; // [contact.ball_ball] as given (laboratory F0)
+  BenchedSlope slope;
+  bool attraction_divided_by_s = true; // `slope.attraction_divided_by_s`
+  ChamberWalls walls;
+  FieldSpec field;
+  MoistureSpec moisture;
+  TrialSpec trial;
+  FailureCriteria failure;
+  CampaignSpec campaign;
+  SlopeOutput output;
+
+  // The soil's contact properties in the slope: F0 / s when
+  // attraction_divided_by_s (paper: 1.2e-4 N / 0.063 = 1.905e-3 N).
+  ContactProperties soil() const;
+  // The defaults for contacts made after the cut: after_cut over soil().
+  ContactProperties soil_after_cut() const;
+};
+
+SlopeScenario parse_slope_scenario(std::string_view toml_text, const std::string& source_name,
+                                   const std::string& base_dir);
+SlopeScenario load_slope_scenario(const std::string& path);
+
+// The resolved scenario as TOML (every default explicit); parsing it back
+// gives the same scenario.
+std::string resolved_slope_toml(const SlopeScenario& s);
+
+} // namespace centridem

@@ -1,0 +1,586 @@
+#include "procedures/slope_trial.hpp"
+
+#include "core/errors.hpp"
+#include "core/interrupt.hpp"
+#include "core/world.hpp"
+#include "io/checkpoint.hpp"
+#include "io/output.hpp"
+#include "io/picture.hpp"
+#include "io/vtk.hpp"
+#include "physics/body_field.hpp"
+#include "procedures/specimen.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <csignal>
+#include <filesystem>
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+#include <numbers>
+#include <unistd.h>
+
+namespace centridem {
+
+namespace fs = std::filesystem;
+using json = nlohmann::json;
+using Clock = std::chrono::steady_clock;
+
+namespace {
+
+double seconds_since(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+double particle_volume(const ParticleStore& P) {
+  double v = 0;
+  for (double r : P.radius) v += 4.0 / 3.0 * std::numbers::pi * r * r * r;
+  return v;
+}
+
+// The settled surface: highest particle top (z + r) in columns 2 d50 wide
+// along x (over the whole breadth); min and mean over the columns [m].
+std::pair<double, double> surface_heights(const ParticleStore& P, double length_m, double d50) {
+  const double w = std::max(2 * d50, length_m / 1000);
+  const int n = std::max(1, static_cast<int>(length_m / w));
+  std::vector<double> top(static_cast<std::size_t>(n), 0.0);
+  for (std::size_t i = 0; i < P.size(); ++i) {
+    const int k = std::clamp(static_cast<int>(P.position[i].x / length_m * n), 0, n - 1);
+    top[static_cast<std::size_t>(k)] =
+        std::max(top[static_cast<std::size_t>(k)], P.position[i].z + P.radius[i]);
+  }
+  double mn = top[0], sum = 0;
+  for (double t : top) mn = std::min(mn, t), sum += t;
+  return {mn, sum / n};
+}
+
+json foundation_json(const FoundationResult& f) {
+  return {{"particles", f.particles},
+          {"steps", f.steps},
+          {"ratio", f.ratio},
+          {"converged", f.converged},
+          {"box_top_m", f.box_top_m},
+          {"surface_min_m", f.surface_min_m},
+          {"surface_mean_m", f.surface_mean_m},
+          {"settlement_m", f.box_top_m - f.surface_mean_m},
+          {"porosity_before", f.porosity_before},
+          {"porosity_after", f.porosity_after},
+          {"brick_particles", f.brick_particles},
+          {"brick_from_cache", f.brick_from_cache},
+          {"brick_file", f.brick_file}};
+}
+
+FoundationResult foundation_from(const json& j) {
+  FoundationResult f;
+  f.particles = j.at("particles");
+  f.steps = j.at("steps");
+  f.ratio = j.at("ratio");
+  f.converged = j.at("converged");
+  f.box_top_m = j.at("box_top_m");
+  f.surface_min_m = j.at("surface_min_m");
+  f.surface_mean_m = j.at("surface_mean_m");
+  f.porosity_before = j.at("porosity_before");
+  f.porosity_after = j.at("porosity_after");
+  f.brick_particles = j.at("brick_particles");
+  f.brick_from_cache = j.at("brick_from_cache");
+  f.brick_file = j.at("brick_file");
+  return f;
+}
+
+// The trial's progress, kept in the checkpoint's procedure blob.
+struct Progress {
+  int phase = 0;         // 0: foundation; 1: levels
+  std::size_t level = 0; // index into plan.g_levels
+  long level_first_step = 0;
+  double level_t0 = 0; // world time at the level's start [s]
+  long foundation_steps = 0;
+  FoundationResult foundation;
+  std::size_t excavated = 0, slope_particles = 0;
+  std::vector<json> done_levels; // {g, monitor, first_step, steps, time_s, time_limit}
+  std::vector<std::pair<double, std::string>> vtk_frames;
+  std::vector<std::string> pictures;
+  int frames = 0;
+  long next_frame_step = 0;
+  int slides = 0;
+};
+
+json level_json(double g, const FailureMonitor& m, long first_step, long steps, double time_s,
+                bool time_limit) {
+  return {{"g_level", g},         {"monitor", m.save()},       {"first_step", first_step},
+          {"steps", steps},       {"time_s", time_s},          {"time_limit", time_limit}};
+}
+
+LevelResult level_from(const json& j, const SlopeGeometry& g, const FailureCriteria& c) {
+  FailureMonitor m(g, c);
+  m.restore(j.at("monitor"));
+  LevelResult r;
+  r.g_level = j.at("g_level");
+  r.report = m.report();
+  r.history = m.history();
+  r.first_step = j.at("first_step");
+  r.steps = j.at("steps");
+  r.time_s = j.at("time_s");
+  r.time_limit = j.at("time_limit");
+  return r;
+}
+
+std::string save_progress(const Progress& p, const FailureMonitor* monitor) {
+  json frames = json::array();
+  for (const auto& [t, f] : p.vtk_frames) frames.push_back({t, f});
+  json j = {{"format", "centridem-slope-trial"},
+            {"version", 1},
+            {"phase", p.phase},
+            {"level", p.level},
+            {"level_first_step", p.level_first_step},
+            {"level_t0", p.level_t0},
+            {"foundation_steps", p.foundation_steps},
+            {"foundation", foundation_json(p.foundation)},
+            {"excavated", p.excavated},
+            {"slope_particles", p.slope_particles},
+            {"done_levels", p.done_levels},
+            {"vtk_frames", frames},
+            {"pictures", p.pictures},
+            {"frames", p.frames},
+            {"next_frame_step", p.next_frame_step},
+            {"slides", p.slides},
+            {"monitor", monitor ? monitor->save() : json(nullptr)}};
+  return j.dump();
+}
+
+Progress load_progress(const std::string& blob, json& monitor_state, const std::string& path) {
+  Progress p;
+  try {
+    const json j = json::parse(blob);
+    if (j.at("format") != "centridem-slope-trial")
+      throw InputError(path + ": not a slope-trial checkpoint");
+    p.phase = j.at("phase");
+    p.level = j.at("level");
+    p.level_first_step = j.at("level_first_step");
+    p.level_t0 = j.at("level_t0");
+    p.foundation_steps = j.at("foundation_steps");
+    p.foundation = foundation_from(j.at("foundation"));
+    p.excavated = j.at("excavated");
+    p.slope_particles = j.at("slope_particles");
+    for (const auto& l : j.at("done_levels")) p.done_levels.push_back(l);
+    for (const auto& f : j.at("vtk_frames")) p.vtk_frames.emplace_back(f.at(0), f.at(1));
+    p.pictures = j.at("pictures").get<std::vector<std::string>>();
+    p.frames = j.at("frames");
+    p.next_frame_step = j.at("next_frame_step");
+    p.slides = j.at("slides");
+    monitor_state = j.at("monitor");
+  } catch (const json::exception& e) {
+    throw InputError(fmt::format("{}: the trial's progress record is unreadable ({})", path,
+                                 e.what()));
+  }
+  return p;
+}
+
+ContactProperties graded(ContactProperties c, double factor) {
+  c.attraction_force_N *= factor;
+  return c;
+}
+
+} // namespace
+
+const LevelResult* SlopeTrialResult::first_failure() const {
+  for (const LevelResult& l : levels)
+    if (l.report.state == SlopeState::failed) return &l;
+  return nullptr;
+}
+
+BodyField slope_field(const SlopeScenario& sc, const SlopeGeometry& g, double g_level) {
+  const double s = g.scale();
+  if (sc.field.kind == FieldKind::uniform) return BodyField::scaled_gravity(g_level, s);
+  const double r_ref =
+      sc.field.reference_radius_m > 0 ? sc.field.reference_radius_m : sc.field.base_radius_m;
+  // The chamber's middle (the end of the model, x = length) under the axis.
+  const Vec3 base{g.length(), 0.5 * g.breadth(), 0.0};
+  const Vec3 axis = sc.field.axis == 'x' ? Vec3{1, 0, 0} : Vec3{0, 1, 0};
+  return BodyField::centrifuge(g_level, s, r_ref, sc.field.base_radius_m, base, axis,
+                               sc.field.coriolis);
+}
+
+SlopeTrialResult run_slope_trial(const SlopeScenario& sc, const SlopeTrialPlan& plan,
+                                 const SlopeTrialOptions& o) {
+  if (plan.g_levels.empty()) throw InputError("g-levels", "(none)", "at least one g-level");
+  const auto t_start = Clock::now();
+  auto say = [&](const std::string& line) {
+    if (o.log) o.log(line);
+  };
+  const fs::path dir(o.dir);
+  make_directories(o.dir);
+  make_directories((dir / "pictures").string());
+  if (sc.output.vtk) make_directories((dir / "frames").string());
+  const std::string ckpt = (dir / "checkpoint.bin").string();
+  const SlopeGeometry geometry(sc.slope);
+  const TrialSpec& ts = sc.trial;
+  const int threads = o.threads >= 0 ? o.threads : ts.threads;
+
+  WorldSettings ws;
+  ws.local_damping = ts.local_damping;
+  ws.threads = threads;
+  World world(ws);
+  Progress pr;
+  std::optional<FailureMonitor> monitor;
+  SlopeTrialResult result;
+
+  if (fs::exists(ckpt)) {
+    // ------------------------------------------------------------- resume
+    const LoadedCheckpoint lc = read_checkpoint(world, ckpt);
+    json mstate;
+    pr = load_progress(lc.procedure_state, mstate, ckpt);
+    if (pr.phase == 1 && !mstate.is_null()) {
+      monitor.emplace(geometry, sc.failure);
+      monitor->restore(mstate);
+    }
+    result.resumed = true;
+    say(fmt::format("resumed from {} at step {} (t = {:.5f} s), {}", ckpt, world.step_count(),
+                    world.time(),
+                    pr.phase == 0 ? std::string("foundation stage")
+                                  : fmt::format("level {} g", plan.g_levels[pr.level])));
+  } else {
+    // ---------------------------------------------------------- foundation
+    const ContactProperties soil = sc.soil();
+    const double L = geometry.length(), B = geometry.breadth();
+    world.add_wall(Wall::plane("floor", {0, 0, 0}, {0, 0, 1}), sc.walls.chamber);
+    world.add_wall(Wall::plane("back", {0, 0, 0}, {1, 0, 0}), sc.walls.chamber);
+    world.add_wall(Wall::plane("side_y0", {0, 0, 0}, {0, 1, 0}), sc.walls.chamber);
+    world.add_wall(Wall::plane("side_y1", {0, B, 0}, {0, -1, 0}), sc.walls.chamber);
+    if (sc.walls.end_wall) world.add_wall(Wall::plane("end", {L, 0, 0}, {-1, 0, 0}), sc.walls.end);
+    world.set_ball_ball_defaults(soil);
+
+    SpecimenSpec spec = sc.specimen;
+    std::string cached;
+    if (!o.cache_dir.empty() && spec.source == SpecimenSpec::Source::distribute &&
+        spec.brick_file.empty()) {
+      SpecimenSpec key = spec;
+      key.region.reset(); // the brick does not depend on the region
+      const std::uint64_t h = fnv1a(resolved_specimen_toml(key));
+      cached = (fs::path(o.cache_dir) / fmt::format("brick_{:016x}.json", h)).string();
+      if (fs::exists(cached)) {
+        spec.brick_file = spec.brick_file_path = cached;
+        pr.foundation.brick_from_cache = true;
+      }
+    }
+    const BuiltSpecimen built =
+        build_specimen(spec, world, [&](std::string_view l) { say(std::string(l)); }, threads);
+    if (!cached.empty() && !pr.foundation.brick_from_cache && built.brick) {
+      make_directories(o.cache_dir);
+      const std::string tmp = cached + fmt::format(".tmp{}", static_cast<long>(::getpid()));
+      write_brick(*built.brick, tmp);
+      fs::rename(tmp, cached); // atomic: parallel trials may race to write it
+    }
+    pr.foundation.brick_file = cached;
+    pr.foundation.brick_particles = built.brick ? built.brick->size() : 0;
+    pr.foundation.particles = world.particles().size();
+    pr.foundation.box_top_m = geometry.height();
+    pr.foundation.porosity_before =
+        1 - particle_volume(world.particles()) / (L * B * geometry.height());
+    const long fit = calm_into_walls(world); // no body force yet
+    world.set_body_field(slope_field(sc, geometry, plan.g_levels[0]));
+    say(fmt::format("fitted into the chamber walls in {} calm steps", fit));
+    say(fmt::format("foundation: {} particles ({}); equilibrium at {:g} g (|g| = {:.4g} m/s^2 "
+                    "at the floor)",
+                    pr.foundation.particles,
+                    pr.foundation.brick_from_cache ? "brick from cache" : "new brick",
+                    plan.g_levels[0],
+                    norm(world.body_field().acceleration({0.5 * L, 0.5 * B, 0}, {}))));
+  }
+
+  // ---------------------------------------------------- cycling helpers
+  const long chunk = ts.check_interval_steps;
+  auto last_ckpt_time = Clock::now();
+  long last_ckpt_step = world.step_count();
+  auto last_progress = Clock::now();
+  long progress_steps = world.step_count();
+  long cycled_steps = 0;
+  double cycled_particle_steps = 0;
+  double cycling_seconds = 0;
+
+  auto checkpoint_now = [&] {
+    write_checkpoint(world, ckpt, save_progress(pr, monitor ? &*monitor : nullptr));
+    last_ckpt_time = Clock::now();
+    last_ckpt_step = world.step_count();
+  };
+  // After each chunk: a checkpoint when due or asked for; Interrupted on a stop.
+  auto after_chunk = [&] {
+    const bool by_time = ts.checkpoint_interval_min > 0 &&
+                         seconds_since(last_ckpt_time) >= 60 * ts.checkpoint_interval_min;
+    const bool by_steps = ts.checkpoint_interval_steps > 0 &&
+                          world.step_count() - last_ckpt_step >= ts.checkpoint_interval_steps;
+    if (const int sig = stop_signal()) {
+      checkpoint_now();
+      throw Interrupted(sig, fmt::format("stopped by signal {} at step {} (t = {:.5f} s); "
+                                         "checkpoint written to {}",
+                                         sig, world.step_count(), world.time(), ckpt));
+    }
+    if (by_time || by_steps) checkpoint_now();
+  };
+  auto cycle_chunk = [&](long n) {
+    const auto t0 = Clock::now();
+    world.cycle(n);
+    const double dt = seconds_since(t0);
+    cycled_steps += n;
+    cycled_particle_steps += static_cast<double>(n) * static_cast<double>(world.particles().size());
+    cycling_seconds += dt;
+  };
+  auto rate = [&] {
+    const double wall = seconds_since(last_progress);
+    const double r = wall > 0 ? static_cast<double>(world.step_count() - progress_steps) *
+                                    static_cast<double>(world.particles().size()) / wall
+                              : 0.0;
+    last_progress = Clock::now();
+    progress_steps = world.step_count();
+    return r;
+  };
+
+  // ---------------------------------------------------------- phase 0
+  if (pr.phase == 0) {
+    const double L = geometry.length();
+    while (pr.foundation_steps < ts.foundation_max_steps) {
+      const long n = std::min(chunk, ts.foundation_max_steps - pr.foundation_steps);
+      cycle_chunk(n);
+      pr.foundation_steps += n;
+      const double ratio = world.mean_unbalanced_force_ratio();
+      if (seconds_since(last_progress) >= o.progress_interval_s)
+        say(fmt::format("foundation: step {}, ratio {:.3g} (target {:.3g}), {:.3g} "
+                        "particle-steps/s",
+                        pr.foundation_steps, ratio, ts.equilibrium_ratio, rate()));
+      if (ratio < ts.equilibrium_ratio) {
+        pr.foundation.converged = true;
+        break;
+      }
+      after_chunk();
+    }
+    FoundationResult& f = pr.foundation;
+    f.steps = pr.foundation_steps;
+    f.ratio = world.mean_unbalanced_force_ratio();
+    const double d50 = median_diameter(world.particles());
+    std::tie(f.surface_min_m, f.surface_mean_m) = surface_heights(world.particles(), L, d50);
+    f.porosity_after =
+        1 - particle_volume(world.particles()) / (L * geometry.breadth() * f.surface_mean_m);
+    say(fmt::format("foundation {} in {} steps (ratio {:.3g}); surface {:.3f} mm (lowest "
+                    "{:.3f} mm) against the crest at {:.3f} mm; porosity {:.4f} -> {:.4f}",
+                    f.converged ? "at equilibrium" : "NOT at equilibrium (step limit)", f.steps,
+                    f.ratio, 1e3 * f.surface_mean_m, 1e3 * f.surface_min_m,
+                    1e3 * geometry.height(), f.porosity_before, f.porosity_after));
+    if (f.surface_min_m < geometry.height() - d50)
+      say(fmt::format("warning: the settled foundation's surface ({:.3f} mm at its lowest) is "
+                      "below the crest ({:.3f} mm): the cut leaves the crest lower than "
+                      "designed",
+                      1e3 * f.surface_min_m, 1e3 * geometry.height()));
+
+    // The cut.
+    pr.excavated = geometry.excavate(world);
+    const ContactProperties soil = sc.soil();
+    if (sc.moisture.enabled) {
+      const int nb = sc.moisture.bands;
+      const double H = geometry.height();
+      const auto& P = world.particles();
+      for (int b = 0; b < nb; ++b) {
+        const double z0 = b == 0 ? -INFINITY : H * b / nb;
+        const double z1 = b == nb - 1 ? INFINITY : H * (b + 1) / nb;
+        const double zc = H * (b + 0.5) / nb;
+        const double factor = sc.moisture.bottom_factor +
+                              (sc.moisture.top_factor - sc.moisture.bottom_factor) * zc / H;
+        world.modify_ball_ball_contacts(
+            [&](std::size_t i, std::size_t j) {
+              const double z = 0.5 * (P.position[i].z + P.position[j].z);
+              return z >= z0 && z < z1;
+            },
+            [&](ContactProperties& c) { c = graded(soil, factor); });
+      }
+    }
+    world.set_ball_ball_defaults(sc.soil_after_cut());
+    world.reset_displacements();
+    pr.slope_particles = world.particles().size();
+    say(fmt::format("cut: {} particles excavated, {} remain in the slope", pr.excavated,
+                    pr.slope_particles));
+    pr.phase = 1;
+    pr.level = 0;
+    pr.level_first_step = world.step_count();
+    pr.level_t0 = world.time();
+    pr.next_frame_step = world.step_count();
+    monitor.emplace(geometry, sc.failure);
+    checkpoint_now();
+  }
+
+  // ---------------------------------------------------------- frames
+  PvdSeries pvd((dir / "slope.pvd").string());
+  for (const auto& [t, f] : pr.vtk_frames) pvd.add(t, f);
+  SideViewWindow window{-0.02 * geometry.length(), 1.02 * geometry.length(),
+                        -0.03 * geometry.height(), 1.08 * geometry.height()};
+  auto write_frame = [&](double g_level) {
+    const ParticleStore& P = world.particles();
+    SideViewInput in;
+    in.x.resize(P.size());
+    in.y.resize(P.size());
+    in.z.resize(P.size());
+    in.radius = P.radius;
+    in.value.resize(P.size());
+    for (std::size_t i = 0; i < P.size(); ++i) {
+      in.x[i] = P.position[i].x, in.y[i] = P.position[i].y, in.z[i] = P.position[i].z;
+      in.value[i] = norm(P.displacement[i]);
+    }
+    in.vmin = sc.output.colour_min_m;
+    in.vmax = sc.output.colour_max_m;
+    for (const SectionPoint& q : geometry.outline()) {
+      in.outline.x.push_back(q.x);
+      in.outline.z.push_back(q.z);
+    }
+    if (monitor && monitor->failed() && !monitor->report().slip_surface.empty()) {
+      SideViewPolyline slip;
+      for (const SectionPoint& q : monitor->report().slip_surface) {
+        slip.x.push_back(q.x);
+        slip.z.push_back(q.z);
+      }
+      slip.label = "detected slip surface";
+      in.extra_lines.push_back(slip);
+    }
+    const double t = world.time() - pr.level_t0;
+    std::string state;
+    if (monitor) state = std::string(to_string(monitor->state()));
+    in.title = fmt::format("{} — {:g} g — t = {:.4f} s — step {} — {}",
+                           sc.name.empty() ? std::string("benched slope") : sc.name, g_level, t,
+                           world.step_count(), state);
+    in.window = window;
+    in.width_px = sc.output.picture_width_px;
+    const std::string name = fmt::format("pictures/frame_{:04d}.png", pr.frames);
+    render_side_view(in, (dir / name).string());
+    pr.pictures.push_back(name);
+    if (sc.output.vtk) {
+      const std::string vtu = fmt::format("frames/particles_{:04d}.vtu", pr.frames);
+      write_particles_vtu(world, (dir / vtu).string());
+      pr.vtk_frames.emplace_back(world.time(), vtu);
+      pvd.add(world.time(), vtu);
+    }
+    ++pr.frames;
+  };
+
+  // ---------------------------------------------------------- levels
+  while (pr.level < plan.g_levels.size()) {
+    const double g = plan.g_levels[pr.level];
+    world.set_body_field(slope_field(sc, geometry, g));
+    if (!monitor) monitor.emplace(geometry, sc.failure);
+    if (world.step_count() == pr.level_first_step && monitor->report().checks == 0) {
+      say(fmt::format("level {:g} g: cycling, a check every {} steps, at most {:g} s", g, chunk,
+                      ts.max_time_s));
+      write_frame(g);
+    }
+    bool time_limit = false;
+    for (;;) {
+      const double t = world.time() - pr.level_t0;
+      const FailureReport& r = monitor->report();
+      if (monitor->stable()) break;
+      if (monitor->failed() &&
+          (monitor->finished() || (r.onset_time_s && t - *r.onset_time_s >= ts.after_failure_time_s)))
+        break;
+      if (t >= ts.max_time_s) {
+        time_limit = !monitor->failed();
+        break;
+      }
+      cycle_chunk(chunk);
+      const SlopeState before = monitor->state();
+      monitor->update(world, world.time() - pr.level_t0);
+      if (monitor->failed() && before != SlopeState::failed)
+        say(fmt::format("level {:g} g: FAILED, onset t = {:.5f} s, start {}, {} particles moving",
+                        g, *monitor->report().onset_time_s,
+                        monitor->report().start_zone ? to_string(*monitor->report().start_zone)
+                                                     : std::string("?"),
+                        monitor->report().particles));
+      if (sc.output.frame_interval_steps > 0 && world.step_count() >= pr.next_frame_step) {
+        pr.next_frame_step = world.step_count() + sc.output.frame_interval_steps;
+        if (world.step_count() > pr.level_first_step) write_frame(g);
+      }
+      if (seconds_since(last_progress) >= o.progress_interval_s) {
+        const FailureReport& q = monitor->report();
+        say(fmt::format("level {:g} g: t = {:.5f} s of {:g}, step {}, ratio {:.3g}, {}, "
+                        "largest moved group {} particles, {:.3g} particle-steps/s",
+                        g, world.time() - pr.level_t0, ts.max_time_s, world.step_count(),
+                        q.unbalanced_force_ratio, to_string(q.state), q.largest_group_particles,
+                        rate()));
+      }
+      after_chunk();
+    }
+    write_frame(g);
+    const long steps = world.step_count() - pr.level_first_step;
+    const double time_s = world.time() - pr.level_t0;
+    pr.done_levels.push_back(
+        level_json(g, *monitor, pr.level_first_step, steps, time_s, time_limit));
+    const FailureReport& r = monitor->report();
+    say(fmt::format("level {:g} g: {}{} after {:.5f} s ({} steps){}", g, to_string(r.state),
+                    time_limit ? " (time limit, undecided)" : "", time_s, steps,
+                    r.state == SlopeState::failed
+                        ? fmt::format("; sliding mass {} particles ({:.1f} % of the slope), "
+                                      "start {}, benches {}, runout {:.2f} mm (model {:.1f} mm)",
+                                      r.particles, 100 * r.volume_share,
+                                      r.start_zone ? to_string(*r.start_zone) : "?",
+                                      fmt::format("{}", fmt::join(r.benches_crossed, ",")),
+                                      1e3 * r.runout_m, 1e3 * r.runout_model_m)
+                        : std::string()));
+    if (r.state == SlopeState::failed) ++pr.slides;
+    ++pr.level;
+    monitor.reset();
+    if (pr.slides >= plan.max_slides) break;
+    if (pr.level < plan.g_levels.size()) { // stepped: raise g on the same model
+      world.reset_displacements();
+      pr.level_first_step = world.step_count();
+      pr.level_t0 = world.time();
+      pr.next_frame_step = world.step_count();
+      monitor.emplace(geometry, sc.failure);
+    }
+  }
+
+  // ---------------------------------------------------------- result
+  result.foundation = pr.foundation;
+  result.excavated = pr.excavated;
+  result.slope_particles = pr.slope_particles;
+  for (const json& l : pr.done_levels) result.levels.push_back(level_from(l, geometry, sc.failure));
+  result.total_steps = world.step_count();
+  result.timestep_s = world.timestep();
+  result.wall_seconds = seconds_since(t_start);
+  result.particle_steps_per_s = cycling_seconds > 0 ? cycled_particle_steps / cycling_seconds : 0;
+  result.pictures = pr.pictures;
+
+  std::string csv = "g_level,time_s,above_threshold,mass_particles,mass_mean_speed_m_s,"
+                    "unbalanced_force_ratio,significant,moving\n";
+  for (const LevelResult& l : result.levels)
+    for (const FailureCheck& c : l.history)
+      csv += fmt::format("{:g},{:.9g},{},{},{:.6g},{:.6g},{},{}\n", l.g_level, c.time_s,
+                         c.above_threshold, c.mass_particles, c.mass_mean_speed_m_s,
+                         c.unbalanced_force_ratio, c.significant ? 1 : 0, c.moving ? 1 : 0);
+  replace_text_file((dir / "checks.csv").string(), csv);
+  replace_text_file((dir / "result.json").string(), to_json(result).dump(2) + "\n");
+  std::error_code ec;
+  fs::remove(ckpt, ec); // finished: result.json is the record
+  (void)cycled_steps;
+  return result;
+}
+
+json to_json(const SlopeTrialResult& r) {
+  json levels = json::array();
+  for (const LevelResult& l : r.levels) {
+    json j = to_json(l.report);
+    j["g_level"] = l.g_level;
+    j["first_step"] = l.first_step;
+    j["steps"] = l.steps;
+    j["level_time_s"] = l.time_s;
+    j["time_limit"] = l.time_limit;
+    levels.push_back(j);
+  }
+  const LevelResult* f = r.first_failure();
+  return {{"foundation", foundation_json(r.foundation)},
+          {"excavated", r.excavated},
+          {"slope_particles", r.slope_particles},
+          {"levels", levels},
+          {"failed", f != nullptr},
+          {"first_failure_g", f ? json(f->g_level) : json(nullptr)},
+          {"total_steps", r.total_steps},
+          {"timestep_s", r.timestep_s},
+          {"wall_seconds", r.wall_seconds},
+          {"particle_steps_per_s", r.particle_steps_per_s},
+          {"pictures", r.pictures},
+          {"resumed", r.resumed}};
+}
+
+} // namespace centridem
