@@ -13,10 +13,10 @@ CENTRIDEM   := ./$(BUILD_DIR)/centridem
 # Re-run scripts/setup.sh only when it changes (or after `make clean`).
 SETUP_STAMP := $(BUILD_DIR)/.setup-done
 
-# The demo. When `centridem demo` (the benched-slope demo) lands, this is the one line to change:
-#   DEMO_CMD = $(CENTRIDEM) demo --out $(DEMO_OUT)
+# The demo: a scaled-down benched slope in the centrifuge, one stable and one failing trial
+# (examples/demo_slope.toml; about a minute on 2 cores).
 DEMO_OUT := runs/demo
-DEMO_CMD  = $(CENTRIDEM) run examples/demo_settle.toml --out $(DEMO_OUT)
+DEMO_CMD  = $(CENTRIDEM) slope examples/demo_slope.toml --out $(DEMO_OUT) --cache runs/cache
 
 FORMAT_DIRS := src tests bench
 
@@ -50,11 +50,13 @@ test-long: build
 	cd $(BUILD_DIR) && ctest -L long --output-on-failure
 
 demo: build
+	rm -rf $(DEMO_OUT)
 	$(DEMO_CMD)
 	@echo
 	@echo "Demo results: $(DEMO_OUT)/"
-	@find $(DEMO_OUT) -name summary.json 2>/dev/null | sort | sed 's/^/  summary:  /' | grep . \
-	  || echo "  summary:  (no summary.json found)"
+	@echo "  summary:  $(DEMO_OUT)/summary.md (table), $(DEMO_OUT)/summary.json, $(DEMO_OUT)/g_levels.png"
+	@for d in $(DEMO_OUT)/trial_*; do \
+	  echo "  pictures: $$d/pictures/ (last: $$(ls $$d/pictures | tail -1))"; done
 	@find $(DEMO_OUT) -name '*.pvd' 2>/dev/null | sort | sed 's/^/  ParaView: /' | grep . \
 	  || echo "  ParaView: (no .pvd files found)"
 	@echo "  Open a .pvd in ParaView (File > Open) to play the frames."

@@ -1,5 +1,7 @@
 #include "app/cmd_shear.hpp"
 
+#include "app/jobs.hpp"
+
 #include "core/errors.hpp"
 #include "core/world.hpp"
 #include "io/plot.hpp"
@@ -19,9 +21,6 @@
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <numbers>
-#include <sys/types.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
 namespace centridem {
 
@@ -149,22 +148,6 @@ void run_one(const ShearScenario& sc, double sigma, int threads, const fs::path&
       100 * r.worst_normal_stress_deviation, r.particles_lost, format_duration(seconds_since(t0))));
 }
 
-// Exit code of an exception, printing it.
-int report_error(std::string_view tag) {
-  try {
-    throw;
-  } catch (const InputError& e) {
-    fmt::print(stderr, "centridem: error: {}{}\n", tag, e.what());
-    return 2;
-  } catch (const InstabilityError& e) {
-    fmt::print(stderr, "centridem: unstable: {}{}\n", tag, e.what());
-    return 3;
-  } catch (const std::exception& e) {
-    fmt::print(stderr, "centridem: error: {}{}\n", tag, e.what());
-    return 1;
-  }
-}
-
 nlohmann::json read_json(const fs::path& path) {
   std::ifstream in(path);
   if (!in) throw std::runtime_error("missing run result " + path.string());
@@ -272,54 +255,12 @@ int run_shear_command(const ShearCommandOptions& o) {
   for (double s : sigmas) fs::remove(out / (run_stem(s) + ".json")); // stale results
 
   int failed_rc = 0;
-  if (jobs <= 1) {
-    for (std::size_t k = 0; k < sigmas.size(); ++k)
-      run_one(sc, sigmas[k], threads, out, k == 0, o.progress_interval_s);
-  } else {
-    std::fflush(stdout);
-    std::fflush(stderr);
-    std::vector<std::pair<pid_t, double>> running;
-    std::size_t next = 0;
-    auto wait_one = [&] {
-      int status = 0;
-      const pid_t pid = ::waitpid(-1, &status, 0);
-      if (pid < 0) throw std::runtime_error("waitpid failed");
-      auto it = std::find_if(running.begin(), running.end(),
-                             [&](const auto& r) { return r.first == pid; });
-      if (it == running.end()) return;
-      const int rc = WIFEXITED(status) ? WEXITSTATUS(status) : 1;
-      if (rc != 0) {
-        fmt::print(stderr, "centridem shear: the {} kPa run failed ({})\n", kpa_label(it->second),
-                   WIFEXITED(status) ? fmt::format("exit code {}", rc)
-                                     : fmt::format("signal {}", WTERMSIG(status)));
-        if (failed_rc == 0) failed_rc = rc;
-      }
-      running.erase(it);
-    };
-    while (next < sigmas.size() || !running.empty()) {
-      if (next < sigmas.size() && static_cast<int>(running.size()) < jobs) {
-        const double sigma = sigmas[next];
-        const bool first = next == 0;
-        const pid_t pid = ::fork();
-        if (pid < 0) throw std::runtime_error("fork failed");
-        if (pid == 0) {
-          int rc = 0;
-          try {
-            run_one(sc, sigma, threads, out, first, o.progress_interval_s);
-          } catch (...) {
-            rc = report_error(kpa_label(sigma) + " kPa: ");
-          }
-          std::fflush(stdout);
-          std::fflush(stderr);
-          ::_exit(rc);
-        }
-        running.emplace_back(pid, sigma);
-        ++next;
-      } else {
-        wait_one();
-      }
-    }
-  }
+  const std::vector<int> codes = run_jobs(
+      sigmas.size(), jobs,
+      [&](std::size_t k) { run_one(sc, sigmas[k], threads, out, k == 0, o.progress_interval_s); },
+      [&](std::size_t k) { return "the " + kpa_label(sigmas[k]) + " kPa run"; });
+  for (int code : codes)
+    if (code > 0 && failed_rc == 0) failed_rc = code;
 
   // Collect.
   std::vector<double> done_sigmas;
@@ -418,7 +359,7 @@ CLI::App* add_shear_subcommand(CLI::App& app) {
     try {
       rc = run_shear_command(*o);
     } catch (...) {
-      rc = report_error("");
+      rc = report_current_exception("");
     }
     if (rc != 0) {
       std::fflush(stdout);

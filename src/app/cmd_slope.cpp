@@ -323,6 +323,18 @@ int run_slope_command(const SlopeCommandOptions& opt) {
   } else {
     if (opt.scenario.empty()) throw InputError("scenario", "(missing)", "a scenario file, or --resume RUN_DIR");
     sc = load_slope_scenario(opt.scenario);
+    if (opt.scale != 0) {
+      // The same slope at another size reduction factor: the DEM box (the
+      // specimen's region) scales with it; the brick is cut to fit.
+      if (!(opt.scale > 0 && opt.scale <= 1))
+        throw InputError("--scale", fmt::format("{:g}", opt.scale), "a size reduction factor in (0, 1]");
+      sc.slope.size_reduction_factor = opt.scale;
+      validate(sc.slope, "slope");
+      if (sc.specimen.source != SpecimenSpec::Source::file)
+        sc.specimen.region = Box{{0, 0, 0},
+                                 {sc.slope.length_m * opt.scale, sc.slope.breadth_m * opt.scale,
+                                  sc.slope.total_height_m * opt.scale}};
+    }
     camp.spec = sc.campaign;
     if (!opt.g_levels.empty() && !opt.search.empty())
       throw InputError("--g", "given with --search", "one of them");
@@ -545,6 +557,9 @@ CLI::App* add_slope_subcommand(CLI::App& app) {
   cmd->add_option("--search", o->search,
                   "bracketing search for the critical g between STABLE and FAILED")
       ->expected(2);
+  cmd->add_option("--scale", o->scale,
+                  "run the slope at this size reduction factor s instead of slope's (smaller: "
+                  "fewer particles, faster; the specimen's region follows)");
   cmd->add_option("--tolerance", o->tolerance_g, "search: stop when the bracket is this narrow [g]")
       ->check(CLI::PositiveNumber);
   cmd->add_option("--jobs", o->jobs, "trials at once, as child processes (default: campaign.jobs)")

@@ -27,6 +27,7 @@ struct SlopeCommandOptions {
   std::vector<double> g_levels;    // --g: independent trials at these levels
   std::vector<double> search;      // --search STABLE FAILED
   double tolerance_g = 0;          // --tolerance (0: the scenario's)
+  double scale = 0;                // --scale: size reduction factor s instead of the scenario's
   int jobs = 0;                    // 0: campaign.jobs
   int threads = -1;                // < 0: trial.threads
   double progress_interval_s = 10; // seconds between progress lines

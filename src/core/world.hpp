@@ -188,6 +188,9 @@ public:
 
   // Forces a rebuild of the neighbour lists (and re-sort) before the next step.
   void request_rebuild() { dirty_ = true; }
+  // Whether the next step starts with a rebuild (a particle moved half the
+  // skin, particles or walls changed, or one was requested).
+  bool rebuild_pending() const { return dirty_; }
 
   // --- clock (checkpoints) -----------------------------------------------------
   struct Clock {

@@ -44,6 +44,7 @@ const Keys kTrialKeys = {"local_damping",
                          "max_time_s",
                          "after_failure_time_s",
                          "after_cut",
+                         "at_cut",
                          "threads",
                          "checkpoint_interval_min",
                          "checkpoint_interval_steps"};
@@ -55,6 +56,7 @@ const Keys kFailureKeys = {"displacement_threshold_d50",
                            "moving_speed_factor",
                            "moving_speed_m_s",
                            "consecutive_checks",
+                           "failure_displacement_d50",
                            "equilibrium_ratio",
                            "growth_tolerance",
                            "slip_surface_bin_d50",
@@ -161,6 +163,7 @@ FailureCriteria read_failure(const toml::table& t, const std::string& P) {
   set("moving_speed_factor", c.moving_speed_factor);
   set("moving_speed_m_s", c.moving_speed_m_s);
   set("equilibrium_ratio", c.equilibrium_ratio);
+  set("failure_displacement_d50", c.failure_displacement_d50);
   set("growth_tolerance", c.growth_tolerance);
   set("slip_surface_bin_d50", c.slip_surface_bin_d50);
   set("start_share", c.start_share);
@@ -186,6 +189,10 @@ ContactProperties SlopeScenario::soil() const {
 
 ContactProperties SlopeScenario::soil_after_cut() const {
   return apply(trial.after_cut, soil());
+}
+
+ContactProperties SlopeScenario::soil_at_cut() const {
+  return apply(trial.at_cut, soil());
 }
 
 SlopeScenario parse_slope_scenario(std::string_view text, const std::string& source_name,
@@ -344,6 +351,10 @@ SlopeScenario parse_slope_scenario(std::string_view text, const std::string& sou
       tr.after_cut = read_contact_patch(*n, P + ".after_cut");
       validate(apply(tr.after_cut, sc.soil()), P + ".after_cut");
     }
+    if (const toml::node* n = t->get("at_cut")) {
+      tr.at_cut = read_contact_patch(*n, P + ".at_cut");
+      validate(apply(tr.at_cut, sc.soil()), P + ".at_cut");
+    }
     if (auto v = opt_integer(
             *t, P, "threads", [](long x) { return x >= 0 && x <= 1024; },
             "OpenMP threads per trial: 0 (the OpenMP default) to 1024"))
@@ -501,22 +512,24 @@ std::string resolved_slope_toml(const SlopeScenario& sc) {
   const TrialSpec& t = sc.trial;
   o += fmt::format("\n[trial]\nlocal_damping = {}\nequilibrium_ratio = {}\n"
                    "foundation_max_steps = {}\ncheck_interval_steps = {}\nmax_time_s = {}\n"
-                   "after_failure_time_s = {}\nafter_cut = {}\nthreads = {}\n"
+                   "after_failure_time_s = {}\nafter_cut = {}\nat_cut = {}\nthreads = {}\n"
                    "checkpoint_interval_min = {}\ncheckpoint_interval_steps = {}\n",
                    num(t.local_damping), num(t.equilibrium_ratio), t.foundation_max_steps,
                    t.check_interval_steps, num(t.max_time_s), num(t.after_failure_time_s),
-                   inline_patch(t.after_cut), t.threads, num(t.checkpoint_interval_min),
+                   inline_patch(t.after_cut), inline_patch(t.at_cut), t.threads, num(t.checkpoint_interval_min),
                    t.checkpoint_interval_steps);
   const FailureCriteria& c = sc.failure;
   o += fmt::format(
       "\n[failure]\ndisplacement_threshold_d50 = {}\ndisplacement_threshold_m = {}\n"
       "link_distance_factor = {}\nmin_particles = {}\nmin_volume_fraction = {}\n"
       "moving_speed_factor = {}\nmoving_speed_m_s = {}\nconsecutive_checks = {}\n"
+      "failure_displacement_d50 = {}\n"
       "equilibrium_ratio = {}\ngrowth_tolerance = {}\nslip_surface_bin_d50 = {}\n"
       "start_share = {}\nbench_share = {}\n",
       num(c.mass.displacement_threshold_d50), num(c.mass.displacement_threshold_m),
       num(c.mass.link_distance_factor), c.min_particles, num(c.min_volume_fraction),
       num(c.moving_speed_factor), num(c.moving_speed_m_s), c.consecutive_checks,
+      num(c.failure_displacement_d50),
       num(c.equilibrium_ratio), num(c.growth_tolerance), num(c.slip_surface_bin_d50),
       num(c.start_share), num(c.bench_share));
   const CampaignSpec& cp = sc.campaign;

@@ -77,6 +77,9 @@ struct TrialSpec {
   // Contact defaults for contacts made after the cut (patch over the soil's):
   // mu_r = 0 and F0 = 0 (paper section 3.2).
   ContactPatch after_cut;
+  // `trial.at_cut`: a patch applied to every contact that exists at the cut
+  // (default: none), e.g. a strength reduction of the whole slope.
+  ContactPatch at_cut;
   int threads = 1;                     // OpenMP threads per trial (0 = OpenMP default)
   double checkpoint_interval_min = 10; // wall-clock minutes between checkpoints (0 = none)
   long checkpoint_interval_steps = 0;  // steps between checkpoints (0 = none)
@@ -125,6 +128,9 @@ struct SlopeScenario {
   ContactProperties soil() const;
   // The defaults for contacts made after the cut: after_cut over soil().
   ContactProperties soil_after_cut() const;
+  // The properties of the contacts that exist at the cut: at_cut over soil()
+  // (before the moisture grading of F0).
+  ContactProperties soil_at_cut() const;
 };
 
 SlopeScenario parse_slope_scenario(std::string_view toml_text, const std::string& source_name,

@@ -70,6 +70,8 @@ void validate(const FailureCriteria& c, const std::string& where) {
           "must be > 0 (x sqrt(g d50))");
   require(c.moving_speed_m_s >= 0, k("moving_speed_m_s"), c.moving_speed_m_s,
           "must be >= 0 [m/s] (0: use moving_speed_factor)");
+  require(c.failure_displacement_d50 >= 0, k("failure_displacement_d50"),
+          c.failure_displacement_d50, "must be >= 0 (median diameters; 0 = off)");
   require(c.consecutive_checks >= 1, k("consecutive_checks"), c.consecutive_checks, "must be >= 1");
   require(c.equilibrium_ratio > 0, k("equilibrium_ratio"), c.equilibrium_ratio, "must be > 0");
   require(c.growth_tolerance >= 0, k("growth_tolerance"), c.growth_tolerance, "must be >= 0");
@@ -216,13 +218,20 @@ SlopeState FailureMonitor::update(const World& world, double time_s) {
   for (std::size_t i = 0; i < P.size(); ++i)
     if (norm2(P.displacement[i]) > t2) first_check_above_.try_emplace(P.id[i], check);
 
-  double speed = 0.0;
-  for (std::size_t i : mass.indices) speed += norm(P.velocity[i]);
-  if (!mass.indices.empty()) speed /= static_cast<double>(mass.size());
+  double speed = 0.0, moved = 0.0;
+  for (std::size_t i : mass.indices) {
+    speed += norm(P.velocity[i]);
+    moved += norm(P.displacement[i]);
+  }
+  if (!mass.indices.empty()) {
+    speed /= static_cast<double>(mass.size());
+    moved /= static_cast<double>(mass.size());
+  }
 
   const bool significant = mass.size() > 0 && mass.size() >= criteria_.min_particles &&
                            mass.volume_m3 >= criteria_.min_volume_fraction * r.slope_volume_m3;
-  const bool moving = significant && speed > r.moving_speed_m_s;
+  const bool moving = significant && speed > r.moving_speed_m_s &&
+                      moved >= criteria_.failure_displacement_d50 * r.d50_m;
   const bool at_rest = r.unbalanced_force_ratio < criteria_.equilibrium_ratio;
   const bool growing =
       static_cast<double>(mass.size()) >

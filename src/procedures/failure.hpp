@@ -70,6 +70,11 @@ struct FailureCriteria {
   double moving_speed_m_s = 0.0;
   // `consecutive_checks`: checks in a row a decision needs (>= 1).
   int consecutive_checks = 2;
+  // `failure_displacement_d50`: the mass is also only moving (failing) once
+  // its mean displacement exceeds this many d50: a face that adjusts after the
+  // cut by a fraction of a grain and comes to rest is not a slide (found on
+  // the paper-size trials: the adjustment is fast but short). 0 = off.
+  double failure_displacement_d50 = 1.0;
   // `equilibrium_ratio`: mean unbalanced-force ratio (PFC mech.ratio.avg)
   // below which the slope is at rest.
   double equilibrium_ratio = 1e-4;

@@ -93,7 +93,7 @@ struct Progress {
   std::size_t level = 0; // index into plan.g_levels
   long level_first_step = 0;
   double level_t0 = 0; // world time at the level's start [s]
-  long foundation_steps = 0;
+  long foundation_first_step = 0; // world step at the start of the foundation's cycling
   FoundationResult foundation;
   std::size_t excavated = 0, slope_particles = 0;
   std::vector<json> done_levels; // {g, monitor, first_step, steps, time_s, time_limit}
@@ -133,7 +133,7 @@ std::string save_progress(const Progress& p, const FailureMonitor* monitor) {
             {"level", p.level},
             {"level_first_step", p.level_first_step},
             {"level_t0", p.level_t0},
-            {"foundation_steps", p.foundation_steps},
+            {"foundation_first_step", p.foundation_first_step},
             {"foundation", foundation_json(p.foundation)},
             {"excavated", p.excavated},
             {"slope_particles", p.slope_particles},
@@ -157,7 +157,7 @@ Progress load_progress(const std::string& blob, json& monitor_state, const std::
     p.level = j.at("level");
     p.level_first_step = j.at("level_first_step");
     p.level_t0 = j.at("level_t0");
-    p.foundation_steps = j.at("foundation_steps");
+    p.foundation_first_step = j.at("foundation_first_step");
     p.foundation = foundation_from(j.at("foundation"));
     p.excavated = j.at("excavated");
     p.slope_particles = j.at("slope_particles");
@@ -262,14 +262,20 @@ SlopeTrialResult run_slope_trial(const SlopeScenario& sc, const SlopeTrialPlan& 
         pr.foundation.brick_from_cache = true;
       }
     }
-    const BuiltSpecimen built =
-        build_specimen(spec, world, [&](std::string_view l) { say(std::string(l)); }, threads);
-    if (!cached.empty() && !pr.foundation.brick_from_cache && built.brick) {
+    auto specimen_log = [&](std::string_view l) { say(std::string(l)); };
+    if (!cached.empty() && !pr.foundation.brick_from_cache) {
+      // Make the brick and cache it; the foundation is then always built from
+      // the cached file, so a first trial and a later one start alike.
+      const std::vector<GradationBin> bins = resolve_gradation(spec);
+      const Brick brick = make_brick(bins, spec.porosity, spec.brick_size_m, spec.density_kg_m3,
+                                     spec.group, spec.seed, spec.relax, specimen_log, threads);
       make_directories(o.cache_dir);
       const std::string tmp = cached + fmt::format(".tmp{}", static_cast<long>(::getpid()));
-      write_brick(*built.brick, tmp);
+      write_brick(brick, tmp);
       fs::rename(tmp, cached); // atomic: parallel trials may race to write it
+      spec.brick_file = spec.brick_file_path = cached;
     }
+    const BuiltSpecimen built = build_specimen(spec, world, specimen_log, threads);
     pr.foundation.brick_file = cached;
     pr.foundation.brick_particles = built.brick ? built.brick->size() : 0;
     pr.foundation.particles = world.particles().size();
@@ -278,6 +284,7 @@ SlopeTrialResult run_slope_trial(const SlopeScenario& sc, const SlopeTrialPlan& 
         1 - particle_volume(world.particles()) / (L * B * geometry.height());
     const long fit = calm_into_walls(world); // no body force yet
     world.set_body_field(slope_field(sc, geometry, plan.g_levels[0]));
+    pr.foundation_first_step = world.step_count();
     say(fmt::format("fitted into the chamber walls in {} calm steps", fit));
     say(fmt::format("foundation: {} particles ({}); equilibrium at {:g} g (|g| = {:.4g} m/s^2 "
                     "at the floor)",
@@ -302,20 +309,6 @@ SlopeTrialResult run_slope_trial(const SlopeScenario& sc, const SlopeTrialPlan& 
     last_ckpt_time = Clock::now();
     last_ckpt_step = world.step_count();
   };
-  // After each chunk: a checkpoint when due or asked for; Interrupted on a stop.
-  auto after_chunk = [&] {
-    const bool by_time = ts.checkpoint_interval_min > 0 &&
-                         seconds_since(last_ckpt_time) >= 60 * ts.checkpoint_interval_min;
-    const bool by_steps = ts.checkpoint_interval_steps > 0 &&
-                          world.step_count() - last_ckpt_step >= ts.checkpoint_interval_steps;
-    if (const int sig = stop_signal()) {
-      checkpoint_now();
-      throw Interrupted(sig, fmt::format("stopped by signal {} at step {} (t = {:.5f} s); "
-                                         "checkpoint written to {}",
-                                         sig, world.step_count(), world.time(), ckpt));
-    }
-    if (by_time || by_steps) checkpoint_now();
-  };
   auto cycle_chunk = [&](long n) {
     const auto t0 = Clock::now();
     world.cycle(n);
@@ -323,6 +316,50 @@ SlopeTrialResult run_slope_trial(const SlopeScenario& sc, const SlopeTrialPlan& 
     cycled_steps += n;
     cycled_particle_steps += static_cast<double>(n) * static_cast<double>(world.particles().size());
     cycling_seconds += dt;
+  };
+  // A checkpoint forces a neighbour rebuild. Written where a rebuild is due
+  // anyway, it does not perturb the run, so a resumed trial and one never
+  // stopped stay bit for bit alike. So a wanted checkpoint (by time, steps or
+  // a stop request) waits for the first step boundary with a rebuild pending;
+  // a model at rest may not rebuild for long: after `patience` steps it is
+  // written anyway (10 checks; 2 for a stop request).
+  bool wanted = false;
+  long wanted_since = 0;
+  auto write_wanted = [&] {
+    checkpoint_now();
+    wanted = false;
+    if (const int sig = stop_signal())
+      throw Interrupted(sig, fmt::format("stopped by signal {} at step {} (t = {:.5f} s); "
+                                         "checkpoint written to {}",
+                                         sig, world.step_count(), world.time(), ckpt));
+  };
+  auto advance = [&](long n) {
+    while (n > 0) {
+      if (!wanted) {
+        cycle_chunk(n);
+        return;
+      }
+      const long patience = (stop_signal() ? 2 : 10) * chunk;
+      while (n > 0 && !world.rebuild_pending() &&
+             world.step_count() - wanted_since < patience) {
+        cycle_chunk(1);
+        --n;
+      }
+      if (world.rebuild_pending() || world.step_count() - wanted_since >= patience)
+        write_wanted();
+    }
+  };
+  // At each check (chunk boundary): is a checkpoint due or asked for?
+  auto after_chunk = [&] {
+    const bool by_time = ts.checkpoint_interval_min > 0 &&
+                         seconds_since(last_ckpt_time) >= 60 * ts.checkpoint_interval_min;
+    const bool by_steps = ts.checkpoint_interval_steps > 0 &&
+                          world.step_count() - last_ckpt_step >= ts.checkpoint_interval_steps;
+    if (!wanted && (by_time || by_steps || stop_signal())) {
+      wanted = true;
+      wanted_since = world.step_count();
+    }
+    if (wanted && world.rebuild_pending()) write_wanted();
   };
   auto rate = [&] {
     const double wall = seconds_since(last_progress);
@@ -337,15 +374,17 @@ SlopeTrialResult run_slope_trial(const SlopeScenario& sc, const SlopeTrialPlan& 
   // ---------------------------------------------------------- phase 0
   if (pr.phase == 0) {
     const double L = geometry.length();
-    while (pr.foundation_steps < ts.foundation_max_steps) {
-      const long n = std::min(chunk, ts.foundation_max_steps - pr.foundation_steps);
-      cycle_chunk(n);
-      pr.foundation_steps += n;
+    for (;;) {
+      const long done = world.step_count() - pr.foundation_first_step;
+      if (done >= ts.foundation_max_steps) break;
+      // Checks at multiples of `chunk` steps, also after a resume mid-chunk.
+      advance(std::min(chunk - done % chunk, ts.foundation_max_steps - done));
       const double ratio = world.mean_unbalanced_force_ratio();
       if (seconds_since(last_progress) >= o.progress_interval_s)
         say(fmt::format("foundation: step {}, ratio {:.3g} (target {:.3g}), {:.3g} "
                         "particle-steps/s",
-                        pr.foundation_steps, ratio, ts.equilibrium_ratio, rate()));
+                        world.step_count() - pr.foundation_first_step, ratio,
+                        ts.equilibrium_ratio, rate()));
       if (ratio < ts.equilibrium_ratio) {
         pr.foundation.converged = true;
         break;
@@ -353,7 +392,7 @@ SlopeTrialResult run_slope_trial(const SlopeScenario& sc, const SlopeTrialPlan& 
       after_chunk();
     }
     FoundationResult& f = pr.foundation;
-    f.steps = pr.foundation_steps;
+    f.steps = world.step_count() - pr.foundation_first_step;
     f.ratio = world.mean_unbalanced_force_ratio();
     const double d50 = median_diameter(world.particles());
     std::tie(f.surface_min_m, f.surface_mean_m) = surface_heights(world.particles(), L, d50);
@@ -372,7 +411,7 @@ SlopeTrialResult run_slope_trial(const SlopeScenario& sc, const SlopeTrialPlan& 
 
     // The cut.
     pr.excavated = geometry.excavate(world);
-    const ContactProperties soil = sc.soil();
+    const ContactProperties at_cut = sc.soil_at_cut();
     if (sc.moisture.enabled) {
       const int nb = sc.moisture.bands;
       const double H = geometry.height();
@@ -388,8 +427,11 @@ SlopeTrialResult run_slope_trial(const SlopeScenario& sc, const SlopeTrialPlan& 
               const double z = 0.5 * (P.position[i].z + P.position[j].z);
               return z >= z0 && z < z1;
             },
-            [&](ContactProperties& c) { c = graded(soil, factor); });
+            [&](ContactProperties& c) { c = graded(at_cut, factor); });
       }
+    } else if (!sc.trial.at_cut.empty()) {
+      world.modify_ball_ball_contacts([](std::size_t, std::size_t) { return true; },
+                                      [&](ContactProperties& c) { c = at_cut; });
     }
     world.set_ball_ball_defaults(sc.soil_after_cut());
     world.reset_displacements();
@@ -469,17 +511,22 @@ SlopeTrialResult run_slope_trial(const SlopeScenario& sc, const SlopeTrialPlan& 
     }
     bool time_limit = false;
     for (;;) {
-      const double t = world.time() - pr.level_t0;
-      const FailureReport& r = monitor->report();
-      if (monitor->stable()) break;
-      if (monitor->failed() &&
-          (monitor->finished() || (r.onset_time_s && t - *r.onset_time_s >= ts.after_failure_time_s)))
-        break;
-      if (t >= ts.max_time_s) {
-        time_limit = !monitor->failed();
-        break;
+      // Decisions at checks only (multiples of `chunk` steps into the level),
+      // also after a resume mid-chunk.
+      const long into = world.step_count() - pr.level_first_step;
+      if (into % chunk == 0) {
+        const double t = world.time() - pr.level_t0;
+        const FailureReport& r = monitor->report();
+        if (monitor->stable()) break;
+        if (monitor->failed() && (monitor->finished() ||
+                                  (r.onset_time_s && t - *r.onset_time_s >= ts.after_failure_time_s)))
+          break;
+        if (t >= ts.max_time_s) {
+          time_limit = !monitor->failed();
+          break;
+        }
       }
-      cycle_chunk(chunk);
+      advance(chunk - into % chunk);
       const SlopeState before = monitor->state();
       monitor->update(world, world.time() - pr.level_t0);
       if (monitor->failed() && before != SlopeState::failed)
@@ -550,6 +597,19 @@ SlopeTrialResult run_slope_trial(const SlopeScenario& sc, const SlopeTrialPlan& 
                          c.above_threshold, c.mass_particles, c.mass_mean_speed_m_s,
                          c.unbalanced_force_ratio, c.significant ? 1 : 0, c.moving ? 1 : 0);
   replace_text_file((dir / "checks.csv").string(), csv);
+  {
+    // The final state, every double exactly (17 significant digits).
+    const ParticleStore& P = world.particles();
+    std::string st = "id,x_m,y_m,z_m,radius_m,vx_m_s,vy_m_s,vz_m_s,ux_m,uy_m,uz_m\n";
+    st.reserve(P.size() * 240);
+    for (std::size_t i = 0; i < P.size(); ++i)
+      st += fmt::format("{},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},"
+                        "{:.17g}\n",
+                        P.id[i], P.position[i].x, P.position[i].y, P.position[i].z, P.radius[i],
+                        P.velocity[i].x, P.velocity[i].y, P.velocity[i].z, P.displacement[i].x,
+                        P.displacement[i].y, P.displacement[i].z);
+    replace_text_file((dir / "final_state.csv").string(), st);
+  }
   replace_text_file((dir / "result.json").string(), to_json(result).dump(2) + "\n");
   std::error_code ec;
   fs::remove(ckpt, ec); // finished: result.json is the record

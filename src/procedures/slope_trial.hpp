@@ -18,7 +18,8 @@
 //
 // Writes into the trial folder: pictures/frame_NNNN.png (side views, log
 // displacement colours, red undeformed outline, g-level and time),
-// frames/*.vtu + slope.pvd (ParaView), checks.csv, result.json, and
+// frames/*.vtu + slope.pvd (ParaView), checks.csv, result.json,
+// final_state.csv (id, position, radius, velocity, displacement; exact), and
 // checkpoint.bin while running (every trial.checkpoint_interval_min minutes
 // or _steps steps, and on SIGINT / SIGTERM). A folder holding checkpoint.bin
 // is resumed from it; one holding result.json is finished.

@@ -194,7 +194,10 @@ TEST(FailureMonitor, ScriptedSlideFromTheCrest) {
   const SlopeGeometry& g = s.g;
   const std::size_t n = s.w.particles().size();
   ASSERT_GT(n, 5000u);
-  FailureMonitor mon(g);
+  // The streak logic alone (no minimum mass displacement; see the next test).
+  FailureCriteria speed_only;
+  speed_only.failure_displacement_d50 = 0.0;
+  FailureMonitor mon(g, speed_only);
   // Nothing moves: stable after two checks (the unbuilt World's ratio is 0).
   EXPECT_EQ(mon.update(s.w, 0.001), SlopeState::undecided);
   EXPECT_EQ(mon.update(s.w, 0.002), SlopeState::stable);
@@ -479,10 +482,40 @@ TEST(FailureMonitor, GentleFrictionalSlopeIsStable) {
   for (const FailureCheck& c : t.history) EXPECT_FALSE(c.significant && c.moving) << c.time_s;
 }
 
+// A fast but small adjustment (under a d50, as a face right after the
+// cut) is not a failure however long it lasts; the same mass moving two d50
+// is, from the first check at which it had moved one d50.
+TEST(FailureMonitor, SmallFastAdjustmentIsNotAFailure) {
+  LatticeSlope s;
+  const SlopeGeometry& g = s.g;
+  const std::size_t n = s.w.particles().size();
+  FailureMonitor mon(g); // default: failure_displacement_d50 = 1
+  EXPECT_EQ(mon.update(s.w, 0.001), SlopeState::undecided);
+  const double d50 = mon.report().d50_m;
+  const auto origin = s.w.particles().position;
+  auto wedge = [&](const Vec3& x) { return x.x > g.crest_x() - 4e-3 && x.z > g.toe_height(); };
+  const Vec3 dir{1, 0, 0};
+  for (int k = 0; k < 5; ++k) { // five checks at 0.5 m/s, displaced 0.6 .. 0.68 d50
+    for (std::size_t i = 0; i < n; ++i)
+      if (wedge(origin[i])) s.move(i, (0.6 + 0.02 * k) * d50 * dir, 0.5 * dir);
+    EXPECT_NE(mon.update(s.w, 0.002 + 0.001 * k), SlopeState::failed) << k;
+  }
+  for (int k = 0; k < 2; ++k) {
+    for (std::size_t i = 0; i < n; ++i)
+      if (wedge(origin[i])) s.move(i, (1.5 + k) * d50 * dir, 0.5 * dir);
+    mon.update(s.w, 0.010 + 0.001 * k);
+  }
+  EXPECT_EQ(mon.state(), SlopeState::failed);
+  ASSERT_TRUE(mon.report().onset_time_s.has_value());
+  EXPECT_DOUBLE_EQ(*mon.report().onset_time_s, 0.010);
+}
+
 // (b) A 45-degree face with mu = mu_r = 0: failed, a slide that starts at
 // the face and runs out beyond the toe.
 TEST(FailureMonitor, FrictionlessSlopeFails) {
-  const Trial t = run_trial(45, 0.0, 0.0, 40000, 40000);
+  // (The mass must also have moved one d50 on average: these grains are
+  // large, d50 ~ 0.68 mm against a 4 mm face, so that takes a while.)
+  const Trial t = run_trial(45, 0.0, 0.0, 100000, 40000);
   const FailureReport& r = t.report;
   ASSERT_EQ(t.state_at_decision, SlopeState::failed);
   EXPECT_EQ(r.state, SlopeState::failed);
