@@ -253,22 +253,22 @@ std::string md_row(double g, const json& l, const std::string& picture) {
   };
   const std::string benches = bench_list(l["benches_crossed"]);
   const bool failed = l["state"] == "failed";
-  return fmt::format(
-      "| {:g} | {}{} | {} | {} | {} | {} | {} | {} |\n", g, str(l["state"]),
-      l.value("time_limit", false) ? " (time limit)" : "",
-      failed ? fmt::format("{:.4f}", l["onset_time_s"].get<double>()) : "–",
-      failed ? str(l["start_zone"]) : "–", failed ? str(l["particles"]) : "–",
-      failed ? fmt::format("{:.1f}", 100 * l["volume_share"].get<double>()) : "–",
-      failed ? (benches.empty() ? "–" : benches) : "–",
-      failed ? fmt::format("{:.1f}", 1e3 * l["runout_model_m"].get<double>()) : "–") +
+  return fmt::format("| {:g} | {}{} | {} | {} | {} | {} | {} | {} |\n", g, str(l["state"]),
+                     l.value("time_limit", false) ? " (time limit)" : "",
+                     failed ? fmt::format("{:.4f}", l["onset_time_s"].get<double>()) : "–",
+                     failed ? str(l["start_zone"]) : "–", failed ? str(l["particles"]) : "–",
+                     failed ? fmt::format("{:.1f}", 100 * l["volume_share"].get<double>()) : "–",
+                     failed ? (benches.empty() ? "–" : benches) : "–",
+                     failed ? fmt::format("{:.1f}", 1e3 * l["runout_model_m"].get<double>())
+                            : "–") +
          (picture.empty() ? "" : "");
 }
 
 void write_plot(const SlopeScenario& sc, const std::vector<std::pair<double, json>>& levels,
                 const std::string& title_extra, const fs::path& png) {
   LinePlot p;
-  p.title = (sc.name.empty() ? std::string("benched slope") : sc.name) + ": g-levels tried" +
-            title_extra;
+  p.title =
+      (sc.name.empty() ? std::string("benched slope") : sc.name) + ": g-levels tried" + title_extra;
   p.x_label = "g-level n";
   p.y_label = "sliding mass (% of the slope's volume)";
   std::vector<double> gs, gf, gu, ys, yf, yu;
@@ -321,13 +321,15 @@ int run_slope_command(const SlopeCommandOptions& opt) {
     if (opt.jobs > 0) camp.spec.jobs = opt.jobs; // the machine may have changed
     fmt::print(stderr, "centridem slope: resuming {}\n", out.string());
   } else {
-    if (opt.scenario.empty()) throw InputError("scenario", "(missing)", "a scenario file, or --resume RUN_DIR");
+    if (opt.scenario.empty())
+      throw InputError("scenario", "(missing)", "a scenario file, or --resume RUN_DIR");
     sc = load_slope_scenario(opt.scenario);
     if (opt.scale != 0) {
       // The same slope at another size reduction factor: the DEM box (the
       // specimen's region) scales with it; the brick is cut to fit.
       if (!(opt.scale > 0 && opt.scale <= 1))
-        throw InputError("--scale", fmt::format("{:g}", opt.scale), "a size reduction factor in (0, 1]");
+        throw InputError("--scale", fmt::format("{:g}", opt.scale),
+                         "a size reduction factor in (0, 1]");
       sc.slope.size_reduction_factor = opt.scale;
       validate(sc.slope, "slope");
       if (sc.specimen.source != SpecimenSpec::Source::file)
@@ -472,22 +474,22 @@ int run_slope_command(const SlopeCommandOptions& opt) {
   if (cs.kind == CampaignKind::list) {
     double lowest_failed = INFINITY, highest_stable = -INFINITY;
     for (const auto& [g, l] : plotted)
-      if (l["state"] == "failed")
-        lowest_failed = std::min(lowest_failed, g);
+      if (l["state"] == "failed") lowest_failed = std::min(lowest_failed, g);
     for (const auto& [g, l] : plotted)
       if (l["state"] != "failed" && g < lowest_failed) highest_stable = std::max(highest_stable, g);
     if (std::isfinite(lowest_failed))
-      critical = {{"stable_g", std::isfinite(highest_stable) ? json(highest_stable) : json(nullptr)},
-                  {"failed_g", lowest_failed}};
+      critical = {
+          {"stable_g", std::isfinite(highest_stable) ? json(highest_stable) : json(nullptr)},
+          {"failed_g", lowest_failed}};
   }
   if (cs.kind == CampaignKind::schedule && !slide_g.empty())
     critical = {{"first_slide_g", slide_g.front()}, {"slides_g", slide_g}};
   if (critical.is_object() && critical.contains("failed_g"))
-    title_extra = critical["stable_g"].is_null()
-                      ? fmt::format(" (fails at {:g} g)", critical["failed_g"].get<double>())
-                      : fmt::format(" (critical between {:g} and {:g} g)",
-                                    critical["stable_g"].get<double>(),
-                                    critical["failed_g"].get<double>());
+    title_extra =
+        critical["stable_g"].is_null()
+            ? fmt::format(" (fails at {:g} g)", critical["failed_g"].get<double>())
+            : fmt::format(" (critical between {:g} and {:g} g)", critical["stable_g"].get<double>(),
+                          critical["failed_g"].get<double>());
   else if (critical.is_object() && critical.contains("first_slide_g"))
     title_extra = fmt::format(" (first slide at {:g} g)", critical["first_slide_g"].get<double>());
   if (!plotted.empty()) write_plot(sc, plotted, title_extra, out / "g_levels.png");
@@ -507,8 +509,8 @@ int run_slope_command(const SlopeCommandOptions& opt) {
   replace_text_file((out / "summary.json").string(), summary.dump(2) + "\n");
   replace_text_file((out / "summary.md").string(), md);
 
-  fmt::print("{:>8} {:>10} {:>10} {:>14} {:>9} {:>8} {:>8} {:>10}\n", "g-level", "state",
-             "onset_s", "start", "sliding", "vol_%", "benches", "wall");
+  fmt::print("{:>8} {:>10} {:>10} {:>14} {:>9} {:>8} {:>8} {:>10}\n", "g-level", "state", "onset_s",
+             "start", "sliding", "vol_%", "benches", "wall");
   for (const TrialOutcome& t : trials) {
     if (!t.done()) {
       fmt::print("{:>8g} {:>10}\n", t.g, "unfinished");
@@ -523,8 +525,7 @@ int run_slope_command(const SlopeCommandOptions& opt) {
                  failed ? l["start_zone"].get<std::string>() : "-",
                  failed ? l["particles"].dump() : "-",
                  failed ? fmt::format("{:.1f}", 100 * l["volume_share"].get<double>()) : "-",
-                 failed ? benches : "-",
-                 format_duration(t.result["wall_seconds"].get<double>()));
+                 failed ? benches : "-", format_duration(t.result["wall_seconds"].get<double>()));
     }
   }
   if (!critical.is_null()) fmt::print("critical g: {}\n", critical.dump());
@@ -534,7 +535,8 @@ int run_slope_command(const SlopeCommandOptions& opt) {
   std::fflush(stdout);
   const int worst = runner.worst_code();
   if (worst > 128)
-    fmt::print(stderr, "centridem slope: interrupted; continue with `centridem slope --resume {}`\n",
+    fmt::print(stderr,
+               "centridem slope: interrupted; continue with `centridem slope --resume {}`\n",
                out.string());
   if (stop_signal() && worst == 0) return 128 + stop_signal();
   return worst;

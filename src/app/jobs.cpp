@@ -83,8 +83,8 @@ std::vector<int> run_jobs(std::size_t n, int jobs, const std::function<void(std:
       continue;
     }
     if (pid < 0) throw std::runtime_error("waitpid failed");
-    auto it = std::find_if(running.begin(), running.end(),
-                           [&](const auto& r) { return r.first == pid; });
+    auto it =
+        std::find_if(running.begin(), running.end(), [&](const auto& r) { return r.first == pid; });
     if (it == running.end()) continue;
     const int code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
     if (code != 0)

@@ -24,7 +24,6 @@ namespace {
 
 constexpr char kMagic[8] = {'C', 'D', 'E', 'M', 'C', 'K', 'P', 'T'};
 
-
 class Writer {
 public:
   template <class T> void pod(const T& v) {

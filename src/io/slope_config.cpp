@@ -19,20 +19,13 @@ namespace {
 
 using namespace tomlread;
 
-const Keys kTopKeys = {"description", "specimen", "contact", "slope",  "field",
+const Keys kTopKeys = {"description", "specimen", "contact", "slope",    "field",
                        "moisture",    "trial",    "failure", "campaign", "output"};
 const Keys kContactSectionKeys = {"ball_ball"};
 const Keys kModelNames = {"linear", "rrlinear", "arrlinear"};
-const Keys kSlopeKeys = {"name",
-                         "size_reduction_factor",
-                         "total_height_m",
-                         "foundation_height_m",
-                         "benches",
-                         "breadth_m",
-                         "crest_to_wall_m",
-                         "length_m",
-                         "attraction_divided_by_s",
-                         "walls"};
+const Keys kSlopeKeys = {
+    "name",      "size_reduction_factor", "total_height_m", "foundation_height_m",     "benches",
+    "breadth_m", "crest_to_wall_m",       "length_m",       "attraction_divided_by_s", "walls"};
 const Keys kBenchKeys = {"height_m", "width_m", "face_angle_deg"};
 const Keys kWallKeys = {"chamber", "end_wall", "end"};
 const Keys kFieldKeys = {"kind", "base_radius_m", "reference_radius_m", "axis", "coriolis"};
@@ -383,8 +376,8 @@ SlopeScenario parse_slope_scenario(std::string_view text, const std::string& sou
                  "or schedule = { g_levels, step_g, max_g }");
     check_keys(*t, P, kCampaignKeys);
     CampaignSpec& c = sc.campaign;
-    const int kinds = (t->get("g_levels") ? 1 : 0) + (t->get("search") ? 1 : 0) +
-                      (t->get("schedule") ? 1 : 0);
+    const int kinds =
+        (t->get("g_levels") ? 1 : 0) + (t->get("search") ? 1 : 0) + (t->get("schedule") ? 1 : 0);
     if (kinds != 1)
       throw InputError(P, kinds == 0 ? "(none given)" : "(more than one given)",
                        "exactly one of g_levels (independent trials), search (critical-g "
@@ -407,8 +400,8 @@ SlopeScenario parse_slope_scenario(std::string_view text, const std::string& sou
       else
         missing(S + ".failed_g", "a g-level at which the slope (expectedly) fails");
       if (!(c.failed_g > c.stable_g))
-        fail(S + ".failed_g", *st.get("failed_g"), fmt::format("must exceed stable_g = {:g}",
-                                                               c.stable_g));
+        fail(S + ".failed_g", *st.get("failed_g"),
+             fmt::format("must exceed stable_g = {:g}", c.stable_g));
       if (auto v = opt_number(st, S, "tolerance_g", positive, "bracket width to stop at > 0 [g]"))
         c.tolerance_g = *v;
     } else {
@@ -485,8 +478,7 @@ std::string resolved_slope_toml(const SlopeScenario& sc) {
   o += "\n[slope]\n";
   if (!sc.name.empty()) o += "name = " + quote(sc.name) + "\n";
   o += fmt::format("size_reduction_factor = {}\ntotal_height_m = {}\nfoundation_height_m = {}\n",
-                   num(b.size_reduction_factor), num(b.total_height_m),
-                   num(b.foundation_height_m));
+                   num(b.size_reduction_factor), num(b.total_height_m), num(b.foundation_height_m));
   o += "benches = [\n";
   for (const Bench& bench : b.benches) {
     o += fmt::format("  {{ height_m = {}", num(bench.height_m));
@@ -506,9 +498,9 @@ std::string resolved_slope_toml(const SlopeScenario& sc) {
                    f.kind == FieldKind::uniform ? "uniform" : "centrifuge", num(f.base_radius_m),
                    num(f.reference_radius_m), f.axis, f.coriolis);
   if (sc.moisture.enabled)
-    o += fmt::format("\n[moisture]\ntop_factor = {}\nbottom_factor = {}\nbands = {}\n",
-                     num(sc.moisture.top_factor), num(sc.moisture.bottom_factor),
-                     sc.moisture.bands);
+    o +=
+        fmt::format("\n[moisture]\ntop_factor = {}\nbottom_factor = {}\nbands = {}\n",
+                    num(sc.moisture.top_factor), num(sc.moisture.bottom_factor), sc.moisture.bands);
   const TrialSpec& t = sc.trial;
   o += fmt::format("\n[trial]\nlocal_damping = {}\nequilibrium_ratio = {}\n"
                    "foundation_max_steps = {}\ncheck_interval_steps = {}\nmax_time_s = {}\n"
@@ -516,22 +508,21 @@ std::string resolved_slope_toml(const SlopeScenario& sc) {
                    "checkpoint_interval_min = {}\ncheckpoint_interval_steps = {}\n",
                    num(t.local_damping), num(t.equilibrium_ratio), t.foundation_max_steps,
                    t.check_interval_steps, num(t.max_time_s), num(t.after_failure_time_s),
-                   inline_patch(t.after_cut), inline_patch(t.at_cut), t.threads, num(t.checkpoint_interval_min),
-                   t.checkpoint_interval_steps);
+                   inline_patch(t.after_cut), inline_patch(t.at_cut), t.threads,
+                   num(t.checkpoint_interval_min), t.checkpoint_interval_steps);
   const FailureCriteria& c = sc.failure;
-  o += fmt::format(
-      "\n[failure]\ndisplacement_threshold_d50 = {}\ndisplacement_threshold_m = {}\n"
-      "link_distance_factor = {}\nmin_particles = {}\nmin_volume_fraction = {}\n"
-      "moving_speed_factor = {}\nmoving_speed_m_s = {}\nconsecutive_checks = {}\n"
-      "failure_displacement_d50 = {}\n"
-      "equilibrium_ratio = {}\ngrowth_tolerance = {}\nslip_surface_bin_d50 = {}\n"
-      "start_share = {}\nbench_share = {}\n",
-      num(c.mass.displacement_threshold_d50), num(c.mass.displacement_threshold_m),
-      num(c.mass.link_distance_factor), c.min_particles, num(c.min_volume_fraction),
-      num(c.moving_speed_factor), num(c.moving_speed_m_s), c.consecutive_checks,
-      num(c.failure_displacement_d50),
-      num(c.equilibrium_ratio), num(c.growth_tolerance), num(c.slip_surface_bin_d50),
-      num(c.start_share), num(c.bench_share));
+  o += fmt::format("\n[failure]\ndisplacement_threshold_d50 = {}\ndisplacement_threshold_m = {}\n"
+                   "link_distance_factor = {}\nmin_particles = {}\nmin_volume_fraction = {}\n"
+                   "moving_speed_factor = {}\nmoving_speed_m_s = {}\nconsecutive_checks = {}\n"
+                   "failure_displacement_d50 = {}\n"
+                   "equilibrium_ratio = {}\ngrowth_tolerance = {}\nslip_surface_bin_d50 = {}\n"
+                   "start_share = {}\nbench_share = {}\n",
+                   num(c.mass.displacement_threshold_d50), num(c.mass.displacement_threshold_m),
+                   num(c.mass.link_distance_factor), c.min_particles, num(c.min_volume_fraction),
+                   num(c.moving_speed_factor), num(c.moving_speed_m_s), c.consecutive_checks,
+                   num(c.failure_displacement_d50), num(c.equilibrium_ratio),
+                   num(c.growth_tolerance), num(c.slip_surface_bin_d50), num(c.start_share),
+                   num(c.bench_share));
   const CampaignSpec& cp = sc.campaign;
   auto list = [](const std::vector<double>& v) {
     std::string l;
@@ -556,8 +547,8 @@ std::string resolved_slope_toml(const SlopeScenario& sc) {
   const SlopeOutput& out = sc.output;
   o += fmt::format("\n[output]\ncolour_range_m = [{}, {}]\nframe_interval_steps = {}\nvtk = {}\n"
                    "picture_width_px = {}\n",
-                   num(out.colour_min_m), num(out.colour_max_m), out.frame_interval_steps,
-                   out.vtk, out.picture_width_px);
+                   num(out.colour_min_m), num(out.colour_max_m), out.frame_interval_steps, out.vtk,
+                   out.picture_width_px);
   return o;
 }
 

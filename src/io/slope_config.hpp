@@ -34,9 +34,9 @@ namespace centridem {
 // the chamber's friction; the end of the model (the middle of the chamber,
 // where the mirror-image slope would be) as a frictionless symmetry wall.
 struct ChamberWalls {
-  ContactProperties chamber;   // `slope.walls.chamber`: patch over Table 1's ball-wall, mu = 0.2
-  bool end_wall = true;        // `slope.walls.end_wall`: a wall at x = length
-  ContactProperties end;       // `slope.walls.end`: patch over the same, mu = 0 (symmetry)
+  ContactProperties chamber; // `slope.walls.chamber`: patch over Table 1's ball-wall, mu = 0.2
+  bool end_wall = true;      // `slope.walls.end_wall`: a wall at x = length
+  ContactProperties end;     // `slope.walls.end`: patch over the same, mu = 0 (symmetry)
 };
 
 enum class FieldKind { uniform, centrifuge };

@@ -452,8 +452,7 @@ nlohmann::json FailureMonitor::save() const {
           {"moving_streak", moving_streak_},
           {"stable_streak", stable_streak_},
           {"settled_streak", settled_streak_},
-          {"streak_start_time_s",
-           streak_start_time_ ? json(*streak_start_time_) : json(nullptr)},
+          {"streak_start_time_s", streak_start_time_ ? json(*streak_start_time_) : json(nullptr)},
           {"streak_start_zone", zone_json(streak_start_zone_)},
           {"previous_group", previous_group_}};
 }

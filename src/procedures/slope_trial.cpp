@@ -92,7 +92,7 @@ struct Progress {
   int phase = 0;         // 0: foundation; 1: levels
   std::size_t level = 0; // index into plan.g_levels
   long level_first_step = 0;
-  double level_t0 = 0; // world time at the level's start [s]
+  double level_t0 = 0;            // world time at the level's start [s]
   long foundation_first_step = 0; // world step at the start of the foundation's cycling
   FoundationResult foundation;
   std::size_t excavated = 0, slope_particles = 0;
@@ -106,8 +106,8 @@ struct Progress {
 
 json level_json(double g, const FailureMonitor& m, long first_step, long steps, double time_s,
                 bool time_limit) {
-  return {{"g_level", g},         {"monitor", m.save()},       {"first_step", first_step},
-          {"steps", steps},       {"time_s", time_s},          {"time_limit", time_limit}};
+  return {{"g_level", g},   {"monitor", m.save()}, {"first_step", first_step},
+          {"steps", steps}, {"time_s", time_s},    {"time_limit", time_limit}};
 }
 
 LevelResult level_from(const json& j, const SlopeGeometry& g, const FailureCriteria& c) {
@@ -169,8 +169,8 @@ Progress load_progress(const std::string& blob, json& monitor_state, const std::
     p.slides = j.at("slides");
     monitor_state = j.at("monitor");
   } catch (const json::exception& e) {
-    throw InputError(fmt::format("{}: the trial's progress record is unreadable ({})", path,
-                                 e.what()));
+    throw InputError(
+        fmt::format("{}: the trial's progress record is unreadable ({})", path, e.what()));
   }
   return p;
 }
@@ -286,12 +286,11 @@ SlopeTrialResult run_slope_trial(const SlopeScenario& sc, const SlopeTrialPlan& 
     world.set_body_field(slope_field(sc, geometry, plan.g_levels[0]));
     pr.foundation_first_step = world.step_count();
     say(fmt::format("fitted into the chamber walls in {} calm steps", fit));
-    say(fmt::format("foundation: {} particles ({}); equilibrium at {:g} g (|g| = {:.4g} m/s^2 "
-                    "at the floor)",
-                    pr.foundation.particles,
-                    pr.foundation.brick_from_cache ? "brick from cache" : "new brick",
-                    plan.g_levels[0],
-                    norm(world.body_field().acceleration({0.5 * L, 0.5 * B, 0}, {}))));
+    say(fmt::format(
+        "foundation: {} particles ({}); equilibrium at {:g} g (|g| = {:.4g} m/s^2 "
+        "at the floor)",
+        pr.foundation.particles, pr.foundation.brick_from_cache ? "brick from cache" : "new brick",
+        plan.g_levels[0], norm(world.body_field().acceleration({0.5 * L, 0.5 * B, 0}, {}))));
   }
 
   // ---------------------------------------------------- cycling helpers
@@ -340,13 +339,11 @@ SlopeTrialResult run_slope_trial(const SlopeScenario& sc, const SlopeTrialPlan& 
         return;
       }
       const long patience = (stop_signal() ? 2 : 10) * chunk;
-      while (n > 0 && !world.rebuild_pending() &&
-             world.step_count() - wanted_since < patience) {
+      while (n > 0 && !world.rebuild_pending() && world.step_count() - wanted_since < patience) {
         cycle_chunk(1);
         --n;
       }
-      if (world.rebuild_pending() || world.step_count() - wanted_since >= patience)
-        write_wanted();
+      if (world.rebuild_pending() || world.step_count() - wanted_since >= patience) write_wanted();
     }
   };
   // At each check (chunk boundary): is a checkpoint due or asked for?
@@ -383,8 +380,8 @@ SlopeTrialResult run_slope_trial(const SlopeScenario& sc, const SlopeTrialPlan& 
       if (seconds_since(last_progress) >= o.progress_interval_s)
         say(fmt::format("foundation: step {}, ratio {:.3g} (target {:.3g}), {:.3g} "
                         "particle-steps/s",
-                        world.step_count() - pr.foundation_first_step, ratio,
-                        ts.equilibrium_ratio, rate()));
+                        world.step_count() - pr.foundation_first_step, ratio, ts.equilibrium_ratio,
+                        rate()));
       if (ratio < ts.equilibrium_ratio) {
         pr.foundation.converged = true;
         break;
@@ -401,8 +398,8 @@ SlopeTrialResult run_slope_trial(const SlopeScenario& sc, const SlopeTrialPlan& 
     say(fmt::format("foundation {} in {} steps (ratio {:.3g}); surface {:.3f} mm (lowest "
                     "{:.3f} mm) against the crest at {:.3f} mm; porosity {:.4f} -> {:.4f}",
                     f.converged ? "at equilibrium" : "NOT at equilibrium (step limit)", f.steps,
-                    f.ratio, 1e3 * f.surface_mean_m, 1e3 * f.surface_min_m,
-                    1e3 * geometry.height(), f.porosity_before, f.porosity_after));
+                    f.ratio, 1e3 * f.surface_mean_m, 1e3 * f.surface_min_m, 1e3 * geometry.height(),
+                    f.porosity_before, f.porosity_after));
     if (f.surface_min_m < geometry.height() - d50)
       say(fmt::format("warning: the settled foundation's surface ({:.3f} mm at its lowest) is "
                       "below the crest ({:.3f} mm): the cut leaves the crest lower than "
@@ -518,8 +515,9 @@ SlopeTrialResult run_slope_trial(const SlopeScenario& sc, const SlopeTrialPlan& 
         const double t = world.time() - pr.level_t0;
         const FailureReport& r = monitor->report();
         if (monitor->stable()) break;
-        if (monitor->failed() && (monitor->finished() ||
-                                  (r.onset_time_s && t - *r.onset_time_s >= ts.after_failure_time_s)))
+        if (monitor->failed() &&
+            (monitor->finished() ||
+             (r.onset_time_s && t - *r.onset_time_s >= ts.after_failure_time_s)))
           break;
         if (t >= ts.max_time_s) {
           time_limit = !monitor->failed();
@@ -603,11 +601,12 @@ SlopeTrialResult run_slope_trial(const SlopeScenario& sc, const SlopeTrialPlan& 
     std::string st = "id,x_m,y_m,z_m,radius_m,vx_m_s,vy_m_s,vz_m_s,ux_m,uy_m,uz_m\n";
     st.reserve(P.size() * 240);
     for (std::size_t i = 0; i < P.size(); ++i)
-      st += fmt::format("{},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},"
-                        "{:.17g}\n",
-                        P.id[i], P.position[i].x, P.position[i].y, P.position[i].z, P.radius[i],
-                        P.velocity[i].x, P.velocity[i].y, P.velocity[i].z, P.displacement[i].x,
-                        P.displacement[i].y, P.displacement[i].z);
+      st +=
+          fmt::format("{},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},"
+                      "{:.17g}\n",
+                      P.id[i], P.position[i].x, P.position[i].y, P.position[i].z, P.radius[i],
+                      P.velocity[i].x, P.velocity[i].y, P.velocity[i].z, P.displacement[i].x,
+                      P.displacement[i].y, P.displacement[i].z);
     replace_text_file((dir / "final_state.csv").string(), st);
   }
   replace_text_file((dir / "result.json").string(), to_json(result).dump(2) + "\n");

@@ -49,10 +49,10 @@ struct SlopeTrialPlan {
 struct FoundationResult {
   std::size_t particles = 0; // after building (the paper: 47,070)
   long steps = 0;
-  double ratio = 0;        // mean unbalanced-force ratio at the end [-]
-  bool converged = false;  // ratio below trial.equilibrium_ratio within the step limit
-  double box_top_m = 0;    // the region's top (the crest height) [m, DEM]
-  double surface_min_m = 0, surface_mean_m = 0; // settled surface, columns of 2 d50 [m]
+  double ratio = 0;       // mean unbalanced-force ratio at the end [-]
+  bool converged = false; // ratio below trial.equilibrium_ratio within the step limit
+  double box_top_m = 0;   // the region's top (the crest height) [m, DEM]
+  double surface_min_m = 0, surface_mean_m = 0;   // settled surface, columns of 2 d50 [m]
   double porosity_before = 0, porosity_after = 0; // of the soil below the surface [-]
   std::size_t brick_particles = 0;
   bool brick_from_cache = false;
@@ -64,8 +64,8 @@ struct LevelResult {
   FailureReport report;
   std::vector<FailureCheck> history;
   long first_step = 0, steps = 0;
-  double time_s = 0;        // DEM time held at this level
-  bool time_limit = false;  // ended by trial.max_time_s before a decision
+  double time_s = 0;       // DEM time held at this level
+  bool time_limit = false; // ended by trial.max_time_s before a decision
 };
 
 struct SlopeTrialResult {
@@ -74,8 +74,8 @@ struct SlopeTrialResult {
   std::vector<LevelResult> levels;
   long total_steps = 0;
   double timestep_s = 0;
-  double wall_seconds = 0;         // this process's share when resumed
-  double particle_steps_per_s = 0; // over this process's cycling
+  double wall_seconds = 0;           // this process's share when resumed
+  double particle_steps_per_s = 0;   // over this process's cycling
   std::vector<std::string> pictures; // relative to the trial folder
   bool resumed = false;
   // Whether the trial (or schedule) failed: the first failed level, if any.
@@ -83,10 +83,10 @@ struct SlopeTrialResult {
 };
 
 struct SlopeTrialOptions {
-  std::string dir;                     // the trial folder (created)
-  std::string cache_dir;               // brick cache (created); "" = no cache
-  double progress_interval_s = 10;     // seconds between progress lines
-  int threads = -1;                    // < 0: trial.threads
+  std::string dir;                           // the trial folder (created)
+  std::string cache_dir;                     // brick cache (created); "" = no cache
+  double progress_interval_s = 10;           // seconds between progress lines
+  int threads = -1;                          // < 0: trial.threads
   std::function<void(std::string_view)> log; // progress lines (none when empty)
 };
 

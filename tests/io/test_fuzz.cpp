@@ -125,16 +125,16 @@ const std::set<std::string>& known_keys() {
       // [campaign], [output]
       "slope", "field", "moisture", "trial", "failure", "campaign", "output", "total_height_m",
       "foundation_height_m", "benches", "breadth_m", "crest_to_wall_m", "attraction_divided_by_s",
-      "face_angle_deg", "chamber", "end_wall", "end", "kind", "base_radius_m",
-      "reference_radius_m", "axis", "coriolis", "top_factor", "bottom_factor", "bands",
-      "equilibrium_ratio", "foundation_max_steps", "check_interval_steps", "max_time_s",
-      "after_failure_time_s", "after_cut", "checkpoint_interval_min", "checkpoint_interval_steps",
+      "face_angle_deg", "chamber", "end_wall", "end", "kind", "base_radius_m", "reference_radius_m",
+      "axis", "coriolis", "top_factor", "bottom_factor", "bands", "equilibrium_ratio",
+      "foundation_max_steps", "check_interval_steps", "max_time_s", "after_failure_time_s",
+      "after_cut", "checkpoint_interval_min", "checkpoint_interval_steps",
       "displacement_threshold_d50", "displacement_threshold_m", "link_distance_factor",
       "min_particles", "min_volume_fraction", "moving_speed_factor", "moving_speed_m_s",
-      "consecutive_checks", "failure_displacement_d50", "growth_tolerance", "slip_surface_bin_d50", "start_share",
-      "bench_share", "g_levels", "search", "schedule", "jobs", "stable_g", "failed_g",
-      "tolerance_g", "step_g", "max_g", "max_slides", "colour_range_m", "frame_interval_steps",
-      "vtk", "picture_width_px"};
+      "consecutive_checks", "failure_displacement_d50", "growth_tolerance", "slip_surface_bin_d50",
+      "start_share", "bench_share", "g_levels", "search", "schedule", "jobs", "stable_g",
+      "failed_g", "tolerance_g", "step_g", "max_g", "max_slides", "colour_range_m",
+      "frame_interval_steps", "vtk", "picture_width_px"};
   return keys;
 }
 

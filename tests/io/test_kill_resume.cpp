@@ -1,0 +1,203 @@
+// Long runs that survive (issue 6), end to end with the `centridem slope`
+// binary on a tiny slope trial that checkpoints every 1,000 steps:
+//   - killed with SIGKILL at 5 random moments, each time resumed with
+//     --resume: the checkpoint is never corrupt and the trial ends bit for bit
+//     where an uninterrupted run ends (final_state.csv, checks.csv);
+//   - a checkpoint with one flipped byte is refused (exit 2, a clear message);
+//   - SIGINT: checkpoint, exit code 130 and a message naming --resume; the
+//     resumed run ends like the uninterrupted one.
+#include <chrono>
+#include <csignal>
+#include <cstdlib>
+#include <filesystem>
+#include <fmt/format.h>
+#include <fstream>
+#include <gtest/gtest.h>
+#include <random>
+#include <sstream>
+#include <string>
+#include <sys/wait.h>
+#include <thread>
+#include <unistd.h>
+#include <vector>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+const char* kScenario = R"(
+[specimen]
+gradation = { bins = [{ d_min_m = 0.2e-3, d_max_m = 0.3e-3, volume_fraction = 1.0 }] }
+porosity = 0.5
+density_kg_m3 = 2633.0
+seed = 3
+brick = { size_m = [2.2575e-3, 1.8e-3, 2.7e-3] }
+
+[contact.ball_ball]
+model = "arrlinear"
+effective_modulus_Pa = 300e6
+stiffness_ratio = 1.5
+friction = 0.5
+rolling_friction = 0.16
+attraction_force_N = 1.2e-4
+
+[slope]
+name = "tiny"
+size_reduction_factor = 0.015
+benches = [{ height_m = 0.075, width_m = 0.03 }, { height_m = 0.075 }]
+breadth_m = 0.12
+
+[trial]
+check_interval_steps = 500
+max_time_s = 0.03
+after_failure_time_s = 0.004
+checkpoint_interval_min = 0
+checkpoint_interval_steps = 1000
+at_cut = { friction = 0.0, rolling_friction = 0.0, attraction_force_N = 0.0 }
+after_cut = { friction = 0.0, rolling_friction = 0.0, attraction_force_N = 0.0 }
+
+[campaign]
+g_levels = [20]
+
+[output]
+frame_interval_steps = 10000
+vtk = false
+picture_width_px = 300
+)";
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+struct Child {
+  pid_t pid = -1;
+  fs::path log;
+};
+
+// Starts `centridem slope ARGS` with stdout and stderr into `log`.
+Child start(const std::vector<std::string>& args, const fs::path& log) {
+  Child r;
+  r.log = log;
+  r.pid = ::fork();
+  if (r.pid == 0) {
+    std::FILE* f = std::freopen(log.c_str(), "w", stdout);
+    if (f) ::dup2(::fileno(stdout), 2);
+    std::vector<char*> argv;
+    std::string bin = CENTRIDEM_BINARY, slope = "slope";
+    argv.push_back(bin.data());
+    argv.push_back(slope.data());
+    std::vector<std::string> copy = args;
+    for (auto& a : copy) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    ::setenv("OMP_NUM_THREADS", "1", 1);
+    ::execv(bin.c_str(), argv.data());
+    ::_exit(127);
+  }
+  return r;
+}
+
+// Exit code, or 128 + signal.
+int wait_for(const Child& r) {
+  int status = 0;
+  ::waitpid(r.pid, &status, 0);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+}
+
+class KillResume : public ::testing::Test {
+protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           fmt::format("centridem_kill_{}_{}", ::getpid(),
+                       ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+    std::ofstream(dir_ / "tiny.toml") << kScenario;
+    // The uninterrupted reference.
+    const Child ref = start({(dir_ / "tiny.toml").string(), "--out", (dir_ / "ref").string(),
+                             "--cache", (dir_ / "cache").string()},
+                            dir_ / "ref.log");
+    ASSERT_EQ(wait_for(ref), 0) << slurp(dir_ / "ref.log");
+    ref_state_ = slurp(dir_ / "ref" / "trial_20g" / "final_state.csv");
+    ref_checks_ = slurp(dir_ / "ref" / "trial_20g" / "checks.csv");
+    ASSERT_GT(ref_state_.size(), 1000u);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  std::vector<std::string> fresh(const fs::path& out) const {
+    return {(dir_ / "tiny.toml").string(), "--out", out.string(), "--cache",
+            (dir_ / "cache").string()};
+  }
+  fs::path dir_;
+  std::string ref_state_, ref_checks_;
+};
+
+TEST_F(KillResume, SigkillAtRandomMomentsNeverLosesTheRun) {
+  const fs::path out = dir_ / "killed";
+  std::mt19937_64 rng(20261122);
+  std::uniform_int_distribution<int> delay_ms(150, 1500);
+  int kills = 0, checkpoints_seen = 0;
+  for (int k = 0; k < 5; ++k) {
+    // Start, or resume once the run folder exists.
+    const bool started = fs::exists(out / "campaign.json");
+    const Child r = start(started ? std::vector<std::string>{"--resume", out.string()} : fresh(out),
+                          dir_ / fmt::format("kill{}.log", k));
+    std::this_thread::sleep_for(std::chrono::milliseconds(delay_ms(rng)));
+    ::kill(r.pid, SIGKILL);
+    const int code = wait_for(r);
+    if (code == 0) break; // finished before the kill
+    ASSERT_EQ(code, 128 + SIGKILL);
+    ++kills;
+    if (!started && !fs::exists(out / "campaign.json")) fs::remove_all(out); // killed at start-up
+    if (fs::exists(out / "trial_20g" / "checkpoint.bin")) ++checkpoints_seen;
+  }
+  EXPECT_EQ(kills, 5) << "the trial finished before five kills; lengthen it";
+  EXPECT_GE(checkpoints_seen, 2);
+  // Finish from the last checkpoint.
+  const Child last = start({"--resume", out.string()}, dir_ / "last.log");
+  ASSERT_EQ(wait_for(last), 0) << slurp(dir_ / "last.log");
+  EXPECT_EQ(slurp(out / "trial_20g" / "final_state.csv"), ref_state_);
+  EXPECT_EQ(slurp(out / "trial_20g" / "checks.csv"), ref_checks_);
+  EXPECT_FALSE(fs::exists(out / "trial_20g" / "checkpoint.bin"));
+}
+
+TEST_F(KillResume, FlippedByteInTheCheckpointIsRefused) {
+  const fs::path out = dir_ / "flip";
+  const Child r = start(fresh(out), dir_ / "flip.log");
+  const fs::path ck = out / "trial_20g" / "checkpoint.bin";
+  for (int i = 0; i < 200 && !fs::exists(ck); ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  ::kill(r.pid, SIGKILL);
+  wait_for(r);
+  ASSERT_TRUE(fs::exists(ck)) << slurp(dir_ / "flip.log");
+  std::string bytes = slurp(ck);
+  bytes[bytes.size() / 2] = static_cast<char>(bytes[bytes.size() / 2] ^ 0x10);
+  std::ofstream(ck, std::ios::binary | std::ios::trunc) << bytes;
+  const Child again = start({"--resume", out.string()}, dir_ / "flip2.log");
+  EXPECT_EQ(wait_for(again), 2);
+  const std::string log = slurp(dir_ / "flip2.log");
+  EXPECT_NE(log.find("checkpoint.bin"), std::string::npos) << log;
+  EXPECT_NE(log.find("checksum"), std::string::npos) << log;
+}
+
+TEST_F(KillResume, SigintWritesACheckpointAndTheRunResumes) {
+  const fs::path out = dir_ / "int";
+  const Child r = start(fresh(out), dir_ / "int.log");
+  // Interrupt once the trial is cycling (its folder exists).
+  for (int i = 0; i < 500 && !fs::exists(out / "trial_20g" / "log.txt"); ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  std::this_thread::sleep_for(std::chrono::milliseconds(400));
+  ::kill(r.pid, SIGINT);
+  const int code = wait_for(r);
+  const std::string log = slurp(dir_ / "int.log");
+  if (code == 0) GTEST_SKIP() << "finished before the interrupt";
+  EXPECT_EQ(code, 130) << log;
+  EXPECT_NE(log.find("--resume"), std::string::npos) << log;
+  EXPECT_TRUE(fs::exists(out / "trial_20g" / "checkpoint.bin"));
+  const Child again = start({"--resume", out.string()}, dir_ / "int2.log");
+  ASSERT_EQ(wait_for(again), 0) << slurp(dir_ / "int2.log");
+  EXPECT_EQ(slurp(out / "trial_20g" / "final_state.csv"), ref_state_);
+}
+
+} // namespace
