@@ -119,13 +119,18 @@ namespace {
 
 using Keys = tomlread::Keys;
 using tomlread::as_bool;
+using tomlread::as_integer;
 using tomlread::as_number;
 using tomlread::as_string;
+using tomlread::as_table;
 using tomlread::as_vec3;
 using tomlread::fail;
 using tomlread::join;
 using tomlread::missing;
 using tomlread::num;
+using tomlread::opt_integer;
+using tomlread::opt_number;
+using tomlread::path_of;
 using tomlread::quote;
 using tomlread::show;
 using tomlread::vec;
@@ -133,10 +138,6 @@ using tomlread::where;
 
 // A TOML float that reads back exactly (shortest round-trip, always with a
 // '.' or an exponent so that it stays a float).
-
-std::string path_of(const std::string& table, std::string_view key) {
-  return table.empty() ? std::string(key) : table + "." + std::string(key);
-}
 
 // Where a key lives when it is not in this table: helps with a key written
 // after a [sub.table] header (TOML puts it into that sub-table).
@@ -177,20 +178,6 @@ void check_keys(const toml::table& t, const std::string& path, const Keys& allow
   });
 }
 
-const toml::table& as_table(const toml::node& n, const std::string& key, const char* what) {
-  if (const toml::table* t = n.as_table()) return *t;
-  fail(key, n, std::string("expected a table: ") + what);
-}
-
-long as_integer(const toml::node& n, const std::string& key, const std::string& allowed) {
-  if (auto i = n.as_integer()) return static_cast<long>(i->get());
-  if (auto f = n.as_floating_point()) { // 1e5 is a float in TOML; accept whole numbers
-    const double v = f->get();
-    if (std::isfinite(v) && v == std::floor(v) && std::abs(v) < 9e15) return static_cast<long>(v);
-  }
-  fail(key, n, "expected a whole number; " + allowed);
-}
-
 std::string one_of(const Keys& names) {
   std::string out;
   for (std::size_t i = 0; i < names.size(); ++i)
@@ -211,31 +198,9 @@ std::string as_choice(const toml::node& n, const std::string& key, const Keys& n
 // Checked accessors on a table. `ok` is the range test, `allowed` the text
 // that says what the range is.
 template <class Ok>
-std::optional<double> opt_number(const toml::table& t, const std::string& path, std::string_view k,
-                                 Ok ok, const std::string& allowed) {
-  const toml::node* n = t.get(k);
-  if (!n) return std::nullopt;
-  const std::string key = path_of(path, k);
-  const double v = as_number(*n, key, allowed);
-  if (!ok(v)) fail(key, *n, allowed);
-  return v;
-}
-
-template <class Ok>
 double number(const toml::table& t, const std::string& path, std::string_view k, double def, Ok ok,
               const std::string& allowed) {
   return opt_number(t, path, k, ok, allowed).value_or(def);
-}
-
-template <class Ok>
-std::optional<long> opt_integer(const toml::table& t, const std::string& path, std::string_view k,
-                                Ok ok, const std::string& allowed) {
-  const toml::node* n = t.get(k);
-  if (!n) return std::nullopt;
-  const std::string key = path_of(path, k);
-  const long v = as_integer(*n, key, allowed);
-  if (!ok(v)) fail(key, *n, allowed);
-  return v;
 }
 
 std::optional<bool> opt_bool(const toml::table& t, const std::string& path, std::string_view k) {

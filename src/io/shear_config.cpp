@@ -18,12 +18,16 @@ namespace {
 
 using Keys = tomlread::Keys;
 using tomlread::as_number;
+using tomlread::as_table;
 using tomlread::check_keys;
 using tomlread::contact_inline;
 using tomlread::fail;
 using tomlread::join;
 using tomlread::missing;
 using tomlread::num;
+using tomlread::opt_integer;
+using tomlread::opt_number;
+using tomlread::path_of;
 using tomlread::show;
 using tomlread::where;
 
@@ -48,38 +52,6 @@ const Keys kShearKeys = {"box",
                          "threads"};
 const Keys kBoxKeys = {"length_m", "width_m", "height_m", "plate_length_m"};
 const Keys kStrainNames = {"height", "length"};
-
-std::string path_of(const std::string& table, std::string_view key) {
-  return table.empty() ? std::string(key) : table + "." + std::string(key);
-}
-
-const toml::table& as_table(const toml::node& n, const std::string& key, const std::string& what) {
-  if (const toml::table* t = n.as_table()) return *t;
-  fail(key, n, "expected a table: " + what);
-}
-
-template <class Ok>
-std::optional<double> opt_number(const toml::table& t, const std::string& path, std::string_view k,
-                                 Ok ok, const std::string& allowed) {
-  const toml::node* n = t.get(k);
-  if (!n) return std::nullopt;
-  const std::string key = path_of(path, k);
-  const double v = as_number(*n, key, allowed);
-  if (!ok(v)) fail(key, *n, allowed);
-  return v;
-}
-
-template <class Ok>
-std::optional<long> opt_integer(const toml::table& t, const std::string& path, std::string_view k,
-                                Ok ok, const std::string& allowed) {
-  const toml::node* n = t.get(k);
-  if (!n) return std::nullopt;
-  const std::string key = path_of(path, k);
-  const auto* i = n->as_integer();
-  if (!i) fail(key, *n, "expected an integer; " + allowed);
-  if (!ok(i->get())) fail(key, *n, allowed);
-  return static_cast<long>(i->get());
-}
 
 auto positive = [](double v) { return v > 0; };
 auto non_negative = [](double v) { return v >= 0; };

@@ -199,7 +199,7 @@ TEST(ShearConfig, WrongTypesAndRangesAreRejected) {
   EXPECT_ERROR(scenario("normal_stresses_Pa = [40e3]\nconsolidation_ratio = 0\n"),
                "shear.consolidation_ratio");
   EXPECT_ERROR(scenario("normal_stresses_Pa = [40e3]\nconsolidation_max_steps = 1.5\n"),
-               "expected an integer");
+               "shear.consolidation_max_steps = 1.5: expected a whole number");
   EXPECT_ERROR(scenario("normal_stresses_Pa = [40e3]\nrecord_interval_steps = 0\n"),
                "shear.record_interval_steps");
   EXPECT_ERROR(scenario("normal_stresses_Pa = [40e3]\nlocal_damping = 1.0\n"),
