@@ -643,21 +643,26 @@ template <bool Periodic> void World::compute_contacts_impl() {
       }
       bb_.properties[e] = pr;
       const Vec3 nrm = d * (1.0 / dist);
-      const Vec3 arm1 = nrm * (r[i] - 0.5 * overlap);
-      const Vec3 arm2 = nrm * -(r[j] - 0.5 * overlap);
+      // Lever arms from the centres to the contact point: a1 n and -a2 n [m].
+      // With them, the relative velocity at the contact point
+      // (v_j + w_j x (-a2 n)) - (v_i + w_i x a1 n) is (v_j - v_i) - (a1 w_i + a2 w_j) x n,
+      // and the moments of a force F about the centres are a1 (n x F) on i and
+      // -a2 (n x F) on j: one cross product each instead of two.
+      const double a1 = r[i] - 0.5 * overlap, a2 = r[j] - 0.5 * overlap;
       const ContactGeometry g{nrm,
                               overlap,
-                              (v[j] + cross(w[j], arm2)) - (v[i] + cross(w[i], arm1)),
+                              (v[j] - v[i]) - cross(a1 * w[i] + a2 * w[j], nrm),
                               w[j] - w[i],
                               std::min(r[i], r[j]),
                               r[i] + r[j],
                               r[i] * r[j] / (r[i] + r[j]),
                               has_dashpot(cp) ? m[i] * m[j] / (m[i] + m[j]) : 0.0};
       const ContactResult res = contact_law(cp, g, bb_.state[e], dt);
+      const Vec3 nxf = cross(nrm, res.force);
       bb_.force_on_2[e] = res.force;
-      bb_.moment_on_2[e] = cross(arm2, res.force) + res.moment;
+      bb_.moment_on_2[e] = res.moment - a2 * nxf;
       fi -= res.force;
-      mi -= cross(arm1, res.force) + res.moment;
+      mi -= a1 * nxf + res.moment;
       if (overlap > max_overlap * std::min(r[i], r[j])) unstable = std::min(unstable, e);
     }
     // Ball-wall contacts of ball i (end 1 = ball, end 2 = wall).
@@ -680,13 +685,13 @@ template <bool Periodic> void World::compute_contacts_impl() {
       }
       bw_.properties[e] = pr;
       const Vec3 nrm = ball_to_wall_normal(wl, prox);
-      const Vec3 arm = nrm * (r[i] - 0.5 * overlap);
+      const double a = r[i] - 0.5 * overlap; // lever arm a n to the contact point [m]
       const ContactGeometry g{
-          nrm, overlap, wl.velocity - (v[i] + cross(w[i], arm)), -w[i], r[i], r[i], r[i], m[i]};
+          nrm, overlap, wl.velocity - v[i] + a * cross(nrm, w[i]), -w[i], r[i], r[i], r[i], m[i]};
       const ContactResult res = contact_law(cp, g, bw_.state[e], dt);
       bw_.force_on_wall[e] = res.force;
       fi -= res.force;
-      mi -= cross(arm, res.force) + res.moment;
+      mi -= a * cross(nrm, res.force) + res.moment;
       if (overlap > max_overlap * r[i])
         unstable = std::min(unstable, UINT32_MAX - 1 - static_cast<std::uint32_t>(i));
     }
