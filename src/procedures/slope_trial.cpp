@@ -1,19 +1,18 @@
 #include "procedures/slope_trial.hpp"
 
 #include "core/errors.hpp"
-#include "core/interrupt.hpp"
 #include "core/world.hpp"
 #include "io/checkpoint.hpp"
 #include "io/output.hpp"
 #include "io/picture.hpp"
 #include "io/vtk.hpp"
 #include "physics/body_field.hpp"
+#include "procedures/checkpointed_cycling.hpp"
 #include "procedures/specimen.hpp"
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <csignal>
 #include <filesystem>
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -295,69 +294,13 @@ SlopeTrialResult run_slope_trial(const SlopeScenario& sc, const SlopeTrialPlan& 
 
   // ---------------------------------------------------- cycling helpers
   const long chunk = ts.check_interval_steps;
-  auto last_ckpt_time = Clock::now();
-  long last_ckpt_step = world.step_count();
   auto last_progress = Clock::now();
   long progress_steps = world.step_count();
-  long cycled_steps = 0;
-  double cycled_particle_steps = 0;
-  double cycling_seconds = 0;
-
-  auto checkpoint_now = [&] {
-    write_checkpoint(world, ckpt, save_progress(pr, monitor ? &*monitor : nullptr));
-    last_ckpt_time = Clock::now();
-    last_ckpt_step = world.step_count();
-  };
-  auto cycle_chunk = [&](long n) {
-    const auto t0 = Clock::now();
-    world.cycle(n);
-    const double dt = seconds_since(t0);
-    cycled_steps += n;
-    cycled_particle_steps += static_cast<double>(n) * static_cast<double>(world.particles().size());
-    cycling_seconds += dt;
-  };
-  // A checkpoint forces a neighbour rebuild. Written where a rebuild is due
-  // anyway, it does not perturb the run, so a resumed trial and one never
-  // stopped stay bit for bit alike. So a wanted checkpoint (by time, steps or
-  // a stop request) waits for the first step boundary with a rebuild pending;
-  // a model at rest may not rebuild for long: after `patience` steps it is
-  // written anyway (10 checks; 2 for a stop request).
-  bool wanted = false;
-  long wanted_since = 0;
-  auto write_wanted = [&] {
-    checkpoint_now();
-    wanted = false;
-    if (const int sig = stop_signal())
-      throw Interrupted(sig, fmt::format("stopped by signal {} at step {} (t = {:.5f} s); "
-                                         "checkpoint written to {}",
-                                         sig, world.step_count(), world.time(), ckpt));
-  };
-  auto advance = [&](long n) {
-    while (n > 0) {
-      if (!wanted) {
-        cycle_chunk(n);
-        return;
-      }
-      const long patience = (stop_signal() ? 2 : 10) * chunk;
-      while (n > 0 && !world.rebuild_pending() && world.step_count() - wanted_since < patience) {
-        cycle_chunk(1);
-        --n;
-      }
-      if (world.rebuild_pending() || world.step_count() - wanted_since >= patience) write_wanted();
-    }
-  };
-  // At each check (chunk boundary): is a checkpoint due or asked for?
-  auto after_chunk = [&] {
-    const bool by_time = ts.checkpoint_interval_min > 0 &&
-                         seconds_since(last_ckpt_time) >= 60 * ts.checkpoint_interval_min;
-    const bool by_steps = ts.checkpoint_interval_steps > 0 &&
-                          world.step_count() - last_ckpt_step >= ts.checkpoint_interval_steps;
-    if (!wanted && (by_time || by_steps || stop_signal())) {
-      wanted = true;
-      wanted_since = world.step_count();
-    }
-    if (wanted && world.rebuild_pending()) write_wanted();
-  };
+  CheckpointedCycling cyc(world, ckpt,
+                          {ts.checkpoint_interval_min, ts.checkpoint_interval_steps, 10}, chunk,
+                          [&] { return save_progress(pr, monitor ? &*monitor : nullptr); });
+  auto advance = [&](long n) { cyc.advance(n); };
+  auto after_chunk = [&] { cyc.at_check(); };
   auto rate = [&] {
     const double wall = seconds_since(last_progress);
     const double r = wall > 0 ? static_cast<double>(world.step_count() - progress_steps) *
@@ -441,7 +384,7 @@ SlopeTrialResult run_slope_trial(const SlopeScenario& sc, const SlopeTrialPlan& 
     pr.level_t0 = world.time();
     pr.next_frame_step = world.step_count();
     monitor.emplace(geometry, sc.failure);
-    checkpoint_now();
+    cyc.write_now();
   }
 
   // ---------------------------------------------------------- frames
@@ -584,7 +527,7 @@ SlopeTrialResult run_slope_trial(const SlopeScenario& sc, const SlopeTrialPlan& 
   result.total_steps = world.step_count();
   result.timestep_s = world.timestep();
   result.wall_seconds = seconds_since(t_start);
-  result.particle_steps_per_s = cycling_seconds > 0 ? cycled_particle_steps / cycling_seconds : 0;
+  result.particle_steps_per_s = cyc.particle_steps_per_s();
   result.pictures = pr.pictures;
 
   std::string csv = "g_level,time_s,above_threshold,mass_particles,mass_mean_speed_m_s,"
@@ -612,7 +555,6 @@ SlopeTrialResult run_slope_trial(const SlopeScenario& sc, const SlopeTrialPlan& 
   replace_text_file((dir / "result.json").string(), to_json(result).dump(2) + "\n");
   std::error_code ec;
   fs::remove(ckpt, ec); // finished: result.json is the record
-  (void)cycled_steps;
   return result;
 }
 
