@@ -127,6 +127,7 @@ std::size_t World::add_wall(Wall wall, const ContactProperties& defaults) {
   wall.properties = register_properties(defaults);
   walls_.push_back(std::move(wall));
   wall_motion_since_build_.push_back({});
+  wall_point_at_build_.push_back(walls_.back().point);
   dirty_ = true;
   return walls_.size() - 1;
 }
@@ -161,6 +162,7 @@ void World::remove_wall(const std::string& name) {
   bw_ = std::move(out);
   walls_.erase(walls_.begin() + static_cast<std::ptrdiff_t>(k));
   wall_motion_since_build_.erase(wall_motion_since_build_.begin() + static_cast<std::ptrdiff_t>(k));
+  wall_point_at_build_.erase(wall_point_at_build_.begin() + static_cast<std::ptrdiff_t>(k));
 }
 
 void World::set_wall_servo(std::size_t wall, const WallServo& servo) {
@@ -579,8 +581,46 @@ void World::rebuild(std::vector<std::uint32_t> candidates) {
   position_at_build_ = p_.position;
   skin_cached_ = n ? 0.5 * *std::min_element(p_.radius.begin(), p_.radius.end()) : 0.0;
   std::fill(wall_motion_since_build_.begin(), wall_motion_since_build_.end(), Vec3{});
+  for (std::size_t k = 0; k < walls_.size(); ++k) wall_point_at_build_[k] = walls_[k].point;
   dirty_ = false;
   ++rebuilds_;
+}
+
+World::BuildState World::build_state() const {
+  const bool pending = dirty_ || bb_.row_offset.size() != p_.size() + 1;
+  if (pending) return {};
+  return {false, position_at_build_, wall_point_at_build_, wall_motion_since_build_};
+}
+
+void World::restore_build_state(const BuildState& s) {
+  if (s.pending) {
+    dirty_ = true;
+    return;
+  }
+  if (s.positions.size() != p_.size() || s.wall_points.size() != walls_.size() ||
+      s.wall_motion.size() != walls_.size())
+    throw InputError(
+        "neighbour-list state",
+        fmt::format("{} particles, {} walls", s.positions.size(), s.wall_points.size()),
+        fmt::format("must match the World's {} particles and {} walls", p_.size(), walls_.size()));
+  // Rebuild at the positions of the last rebuild. The particles are already
+  // in the order that rebuild sorted them into (the stable sort by cell
+  // leaves them in place), so only the lists are made.
+  std::vector<Vec3> now = std::move(p_.position);
+  const std::vector<std::int64_t> ids = p_.id;
+  std::vector<Vec3> walls_now;
+  for (std::size_t k = 0; k < walls_.size(); ++k) {
+    walls_now.push_back(walls_[k].point);
+    walls_[k].point = s.wall_points[k];
+  }
+  p_.position = s.positions;
+  rebuild_sorted();
+  if (p_.id != ids)
+    throw std::logic_error("restore_build_state: the particles were not in rebuild order");
+  p_.position = std::move(now);
+  for (std::size_t k = 0; k < walls_.size(); ++k) walls_[k].point = walls_now[k];
+  wall_motion_since_build_ = s.wall_motion;
+  --rebuilds_; // not a rebuild of the run
 }
 
 // ------------------------------------------------------------------- cycle --

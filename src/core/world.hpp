@@ -192,6 +192,23 @@ public:
   // skin, particles or walls changed, or one was requested).
   bool rebuild_pending() const { return dirty_; }
 
+  // --- neighbour-list state (exact checkpoints) ------------------------------
+  // What the neighbour lists were built from: with it (and the particles in
+  // their current order, the walls and the contact records) a new World
+  // rebuilds exactly the same lists, so a checkpoint need not force a rebuild
+  // and a resumed run goes on bit for bit (io/checkpoint.hpp).
+  struct BuildState {
+    bool pending = true;           // a rebuild is due before the next step
+    std::vector<Vec3> positions;   // particle positions at the last rebuild [m]
+    std::vector<Vec3> wall_points; // wall reference points at the last rebuild [m]
+    std::vector<Vec3> wall_motion; // wall displacement since the last rebuild [m]
+  };
+  BuildState build_state() const;
+  // Rebuilds the lists from `s` (call after the particles, walls and
+  // restore_contacts); the next step then starts as it would have in the
+  // World the state was taken from. Throws InputError if `s` does not fit.
+  void restore_build_state(const BuildState& s);
+
   // --- clock (checkpoints) -----------------------------------------------------
   struct Clock {
     long step = 0;
@@ -229,6 +246,7 @@ private:
   std::vector<Vec3> position_at_build_;
   std::vector<Wall> walls_;
   std::vector<Vec3> wall_motion_since_build_;
+  std::vector<Vec3> wall_point_at_build_;
   BodyField field_;
   std::vector<ContactProperties> props_;
   std::uint16_t ball_ball_default_ = 0;

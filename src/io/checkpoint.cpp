@@ -87,11 +87,11 @@ private:
 
 } // namespace
 
-void write_checkpoint(World& world, const std::string& path, const std::string& procedure_state) {
-  // Both this World and the one resumed from the file rebuild before their next
-  // step, from the same state: identical order, lists and sums from here on.
-  world.request_rebuild();
-
+void write_checkpoint(const World& world, const std::string& path,
+                      const std::string& procedure_state) {
+  // The neighbour-list state goes with the particles, so the World resumed
+  // from the file rebuilds exactly the lists this one has: the run is not
+  // perturbed, and both go on with identical order, lists and sums.
   Writer w;
   w.pod(world.settings());
   w.pod(world.clock());
@@ -114,6 +114,9 @@ void write_checkpoint(World& world, const std::string& path, const std::string& 
     w.props(world.wall_defaults(k));
   }
   w.vec(world.contact_records());
+  const World::BuildState b = world.build_state();
+  w.pod(static_cast<std::uint8_t>(b.pending ? 1 : 0));
+  w.vec(b.positions), w.vec(b.wall_points), w.vec(b.wall_motion);
   w.str(procedure_state);
 
   std::string payload = std::move(w.data());
@@ -211,10 +214,18 @@ LoadedCheckpoint read_checkpoint(World& world, const std::string& path) {
     world.add_wall(std::move(wl), props);
   }
   world.restore_contacts(r.vec<ContactRecord>());
+  World::BuildState b;
+  b.pending = r.pod<std::uint8_t>() != 0;
+  b.positions = r.vec<Vec3>(), b.wall_points = r.vec<Vec3>(), b.wall_motion = r.vec<Vec3>();
   LoadedCheckpoint out;
   out.procedure_state = r.str();
   if (!r.done()) r.fail("trailing bytes");
   world.set_clock(clock);
+  try {
+    world.restore_build_state(b);
+  } catch (const InputError& e) {
+    r.fail(e.what());
+  }
   return out;
 }
 

@@ -4,10 +4,11 @@
 // random generator state), in one binary file with a format version and a
 // checksum, written atomically (write aside, fsync, rename).
 //
-// Resuming reproduces a run bit for bit on the same thread count: writing a
-// checkpoint forces a neighbour rebuild of the running World, and reading one
-// rebuilds the new World from the same state, so both continue from identical
-// particle order and neighbour lists.
+// Resuming reproduces a run bit for bit on the same thread count: the file
+// holds the particles in their current order and what the neighbour lists
+// were built from (World::BuildState), so the resumed World rebuilds exactly
+// the lists the running one has. Writing a checkpoint does not perturb the
+// run: a run that wrote checkpoints and one that did not are identical.
 #pragma once
 
 #include <cstdint>
@@ -18,15 +19,14 @@ namespace centridem {
 
 class World;
 
-inline constexpr unsigned kCheckpointVersion = 1;
+inline constexpr unsigned kCheckpointVersion = 2; // 2: with the neighbour-list state
 
 // FNV-1a, 64 bit: the checkpoint checksum (detects flipped bytes; with the
 // stored length, truncation); also a cache key for recipes.
 std::uint64_t fnv1a(std::string_view data);
 
 // Writes `world` (and `procedure_state`, any bytes) to `path` atomically.
-// Requests a rebuild of `world` (see above).
-void write_checkpoint(World& world, const std::string& path,
+void write_checkpoint(const World& world, const std::string& path,
                       const std::string& procedure_state = {});
 
 struct LoadedCheckpoint {

@@ -11,13 +11,12 @@
 namespace centridem {
 
 CheckpointedCycling::CheckpointedCycling(World& world, std::string path, CheckpointPolicy policy,
-                                         long check_interval_steps,
                                          std::function<std::string()> progress)
-    : world_(world), path_(std::move(path)), policy_(policy),
-      chunk_(check_interval_steps > 0 ? check_interval_steps : 1), progress_(std::move(progress)),
+    : world_(world), path_(std::move(path)), policy_(policy), progress_(std::move(progress)),
       last_time_(Clock::now()), last_step_(world.step_count()) {}
 
-void CheckpointedCycling::cycle_chunk(long n) {
+void CheckpointedCycling::advance(long n) {
+  if (n <= 0) return;
   const auto t0 = Clock::now();
   world_.cycle(n);
   seconds_ += std::chrono::duration<double>(Clock::now() - t0).count();
@@ -26,46 +25,26 @@ void CheckpointedCycling::cycle_chunk(long n) {
 }
 
 void CheckpointedCycling::write_now() {
+  if (path_.empty()) return;
   write_checkpoint(world_, path_, progress_ ? progress_() : std::string());
   last_time_ = Clock::now();
   last_step_ = world_.step_count();
 }
 
-void CheckpointedCycling::write_wanted() {
-  write_now();
-  wanted_ = false;
-  if (const int sig = stop_signal())
-    throw Interrupted(sig, fmt::format("stopped by signal {} at step {} (t = {:.5f} s); "
-                                       "checkpoint written to {}",
-                                       sig, world_.step_count(), world_.time(), path_));
-}
-
-void CheckpointedCycling::advance(long n) {
-  while (n > 0) {
-    if (!wanted_) {
-      cycle_chunk(n);
-      return;
-    }
-    const long patience = (stop_signal() ? 2 : policy_.patience_checks) * chunk_;
-    while (n > 0 && !world_.rebuild_pending() && world_.step_count() - wanted_since_ < patience) {
-      cycle_chunk(1);
-      --n;
-    }
-    if (world_.rebuild_pending() || world_.step_count() - wanted_since_ >= patience) write_wanted();
-  }
-}
-
 void CheckpointedCycling::at_check() {
+  if (path_.empty()) return;
   const bool by_time =
       policy_.interval_min > 0 &&
       std::chrono::duration<double>(Clock::now() - last_time_).count() >= 60 * policy_.interval_min;
   const bool by_steps =
       policy_.interval_steps > 0 && world_.step_count() - last_step_ >= policy_.interval_steps;
-  if (!wanted_ && (by_time || by_steps || stop_signal())) {
-    wanted_ = true;
-    wanted_since_ = world_.step_count();
-  }
-  if (wanted_ && world_.rebuild_pending()) write_wanted();
+  const int sig = stop_signal();
+  if (!(by_time || by_steps || sig)) return;
+  write_now();
+  if (sig)
+    throw Interrupted(sig, fmt::format("stopped by signal {} at step {} (t = {:.5f} s); "
+                                       "checkpoint written to {}",
+                                       sig, world_.step_count(), world_.time(), path_));
 }
 
 } // namespace centridem

@@ -3,16 +3,12 @@
 // boundaries counted from a fixed step, so a resume mid-chunk finishes the
 // chunk first) and calls `at_check()` there; it advances with `advance(n)`.
 //
-// A checkpoint forces a neighbour rebuild (io/checkpoint.hpp). Written where
-// a rebuild is pending anyway it does not perturb the run, so a run stopped
-// and resumed (any number of times, same thread count) ends bit for bit like
-// one never stopped. A wanted checkpoint (by wall time, by steps, or a stop
-// request: SIGINT / SIGTERM, core/interrupt.hpp) therefore waits for the
-// first step boundary with a rebuild pending. A model at rest may not rebuild
-// for long: after `patience` checks (2 for a stop request) it is written
-// anyway, and that run then differs from an unstopped one by round-off only.
-// After a stop request's checkpoint, `Interrupted` is thrown (exit code
-// 128 + signal), naming the checkpoint.
+// At a check, a checkpoint is written when one is due (wall-clock minutes or
+// steps since the last one) or asked for (SIGINT / SIGTERM,
+// core/interrupt.hpp); after a stop request's checkpoint `Interrupted` is
+// thrown (exit code 128 + signal), naming the checkpoint. Writing one does not
+// perturb the run (io/checkpoint.hpp), so a run stopped and resumed any number
+// of times ends bit for bit like one never stopped (same thread count).
 #pragma once
 
 #include <chrono>
@@ -26,24 +22,22 @@ class World;
 struct CheckpointPolicy {
   double interval_min = 10; // wall-clock minutes between checkpoints; 0 = not by time
   long interval_steps = 0;  // steps between checkpoints; 0 = not by steps
-  int patience_checks = 10; // checks to wait for a pending rebuild before writing anyway
 };
 
 class CheckpointedCycling {
 public:
   // `progress` returns the procedure's own state (the checkpoint's blob) at
-  // the moment a checkpoint is written. `check_interval_steps` is the
-  // procedure's chunk (it sets the patience in steps).
+  // the moment a checkpoint is written. An empty `path` turns checkpoints off
+  // (then this only cycles and counts).
   CheckpointedCycling(World& world, std::string path, CheckpointPolicy policy,
-                      long check_interval_steps, std::function<std::string()> progress);
+                      std::function<std::string()> progress);
 
-  // Cycles n steps; a wanted checkpoint is written at the first step with a
-  // neighbour rebuild pending (or when the patience runs out).
+  // Cycles n steps.
   void advance(long n);
-  // At a check: a checkpoint that is due (time, steps) or asked for (stop
-  // request) becomes wanted, and is written now if a rebuild is pending.
+  // At a check: writes a checkpoint if one is due or a stop was asked for
+  // (then throws Interrupted).
   void at_check();
-  // Writes a checkpoint now (forces a rebuild).
+  // Writes a checkpoint now.
   void write_now();
 
   const std::string& path() const { return path_; }
@@ -55,18 +49,13 @@ public:
 
 private:
   using Clock = std::chrono::steady_clock;
-  void cycle_chunk(long n);
-  void write_wanted();
 
   World& world_;
   std::string path_;
   CheckpointPolicy policy_;
-  long chunk_;
   std::function<std::string()> progress_;
   Clock::time_point last_time_;
   long last_step_;
-  bool wanted_ = false;
-  long wanted_since_ = 0;
   long steps_ = 0;
   double particle_steps_ = 0;
   double seconds_ = 0;

@@ -2,14 +2,19 @@
 #include "procedures/specimen.hpp"
 
 #include "core/errors.hpp"
+#include "io/checkpoint.hpp"
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <filesystem>
 #include <fmt/format.h>
+#include <nlohmann/json.hpp>
 #include <numbers>
 
 namespace centridem {
+
+using json = nlohmann::json;
 
 namespace {
 constexpr const char* kUpperWalls[] = {"top",      "upper_x0", "upper_x1",
@@ -82,16 +87,108 @@ void add_shear_box(World& w, const ShearBox& b, const ContactProperties& ball_wa
   rect("plate_upper", {L + P / 2, W / 2, h}, {0, 0, -1}, {1, 0, 0}, P, W);
 }
 
+namespace {
+
+// The test's progress, kept in the checkpoint's procedure blob.
+struct ShearProgressState {
+  int phase = 0;                     // 0: consolidation; 1: shearing
+  long consolidation_first_step = 0; // world step when consolidation cycling began
+  long fit_steps = 0;                // calm steps that fitted the specimen into the box
+  long shear_first_step = 0;         // world step when shearing began
+  double x0 = 0;                     // top wall x at the start of shearing [m]
+  double t_start = 0;                // world time at the start of shearing [s]
+  double sum_sigma = 0, sum_fx = 0;  // sums over the current record interval
+  long samples = 0;
+  double wall_seconds = 0;                        // spent before the last resume [s]
+  double particle_steps = 0, cycling_seconds = 0; // before the last resume
+  DirectShearResult r;
+};
+
+std::string save_state(const ShearProgressState& p, double wall_seconds_now,
+                       const CheckpointedCycling& cyc) {
+  json curve = json::array();
+  for (const ShearPoint& q : p.r.curve)
+    curve.push_back({q.step, q.time_s, q.shear_displacement_m, q.shear_strain, q.shear_stress_Pa,
+                     q.normal_stress_Pa, q.vertical_displacement_m, q.porosity});
+  const DirectShearResult& r = p.r;
+  return json{{"format", "centridem-direct-shear"},
+              {"version", 1},
+              {"phase", p.phase},
+              {"consolidation_first_step", p.consolidation_first_step},
+              {"fit_steps", p.fit_steps},
+              {"shear_first_step", p.shear_first_step},
+              {"x0", p.x0},
+              {"t_start", p.t_start},
+              {"sum_sigma", p.sum_sigma},
+              {"sum_fx", p.sum_fx},
+              {"samples", p.samples},
+              {"wall_seconds", p.wall_seconds + wall_seconds_now},
+              {"particle_steps", p.particle_steps + cyc.particle_steps()},
+              {"cycling_seconds", p.cycling_seconds + cyc.cycling_seconds()},
+              {"consolidation_steps", r.consolidation_steps},
+              {"consolidated_height_m", r.consolidated_height_m},
+              {"consolidated_normal_stress_Pa", r.consolidated_normal_stress_Pa},
+              {"peak_shear_stress_Pa", r.peak_shear_stress_Pa},
+              {"peak_strain", r.peak_strain},
+              {"worst_normal_stress_deviation", r.worst_normal_stress_deviation},
+              {"curve", curve}}
+      .dump();
+}
+
+ShearProgressState load_state(const std::string& blob, const std::string& path) {
+  ShearProgressState p;
+  try {
+    const json j = json::parse(blob);
+    if (j.at("format") != "centridem-direct-shear")
+      throw InputError(path + ": not a direct-shear checkpoint");
+    p.phase = j.at("phase");
+    p.consolidation_first_step = j.at("consolidation_first_step");
+    p.fit_steps = j.at("fit_steps");
+    p.shear_first_step = j.at("shear_first_step");
+    p.x0 = j.at("x0");
+    p.t_start = j.at("t_start");
+    p.sum_sigma = j.at("sum_sigma");
+    p.sum_fx = j.at("sum_fx");
+    p.samples = j.at("samples");
+    p.wall_seconds = j.at("wall_seconds");
+    p.particle_steps = j.at("particle_steps");
+    p.cycling_seconds = j.at("cycling_seconds");
+    DirectShearResult& r = p.r;
+    r.consolidation_steps = j.at("consolidation_steps");
+    r.consolidated_height_m = j.at("consolidated_height_m");
+    r.consolidated_normal_stress_Pa = j.at("consolidated_normal_stress_Pa");
+    r.peak_shear_stress_Pa = j.at("peak_shear_stress_Pa");
+    r.peak_strain = j.at("peak_strain");
+    r.worst_normal_stress_deviation = j.at("worst_normal_stress_deviation");
+    for (const json& q : j.at("curve"))
+      r.curve.push_back({q.at(0), q.at(1), q.at(2), q.at(3), q.at(4), q.at(5), q.at(6), q.at(7)});
+  } catch (const json::exception& e) {
+    throw InputError(fmt::format("{}: the direct shear test's progress record is unreadable ({})",
+                                 path, e.what()));
+  }
+  return p;
+}
+
+} // namespace
+
 DirectShearResult run_direct_shear(World& w, const DirectShearSpec& s,
-                                   const ShearProgress& progress) {
+                                   const ShearProgress& progress,
+                                   const DirectShearCheckpoints& ck) {
   validate(s);
   const auto t0 = std::chrono::steady_clock::now();
+  auto seconds = [&] {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  };
   const double area = s.box.length_m * s.box.width_m;
-  const double target = s.normal_stress_Pa * area;
-  // Spheres whose centres lie in the box may poke through its faces; with
-  // 1 GPa walls that would fire them out. Pull each centre at least its
-  // radius inside first (ball-ball overlaps this makes are relaxed below).
-  {
+  ShearProgressState pr;
+  const bool resume = !ck.path.empty() && std::filesystem::exists(ck.path);
+  if (resume) {
+    pr = load_state(read_checkpoint(w, ck.path).procedure_state, ck.path);
+    pr.r.resumed = true;
+  } else {
+    // Spheres whose centres lie in the box may poke through its faces; with
+    // 1 GPa walls that would fire them out. Pull each centre at least its
+    // radius inside first (ball-ball overlaps this makes are relaxed below).
     auto& P = w.particles_mut();
     const Vec3 hi{s.box.length_m, s.box.width_m, s.box.height_m};
     for (std::size_t i = 0; i < P.size(); ++i)
@@ -99,72 +196,91 @@ DirectShearResult run_direct_shear(World& w, const DirectShearSpec& s,
         P.position[i][a] =
             std::clamp(P.position[i][a], P.radius[i], std::max(P.radius[i], hi[a] - P.radius[i]));
     w.particles_changed();
+    add_shear_box(w, s.box, s.ball_wall, s.max_shear_displacement_m);
   }
-  add_shear_box(w, s.box, s.ball_wall, s.max_shear_displacement_m);
   const std::size_t bottom = w.wall_index("bottom"), top = w.wall_index("top");
   std::vector<std::size_t> upper;
   for (const char* name : kUpperWalls) upper.push_back(w.wall_index(name));
+  const Vec3 servo_direction{0, 0, 1}; // the bottom wall pushes up into the specimen
+  auto normal_stress = [&] { return -dot(w.walls()[bottom].force, servo_direction) / area; };
+  auto height = [&] { return w.walls()[top].point.z - w.walls()[bottom].point.z; };
+  DirectShearResult& r = pr.r;
 
-  WallServo servo;
-  servo.active = true;
-  servo.direction = {0, 0, 1}; // the bottom wall pushes up into the specimen
-  servo.target_force_N = target;
-  servo.gain_factor = s.servo_gain_factor;
-  servo.max_speed_m_per_s = s.servo_max_speed_m_per_s;
-  w.set_wall_servo(bottom, servo);
-
-  DirectShearResult r;
+  if (!resume) {
+    WallServo servo;
+    servo.active = true;
+    servo.direction = servo_direction;
+    servo.target_force_N = s.normal_stress_Pa * area;
+    servo.gain_factor = s.servo_gain_factor;
+    servo.max_speed_m_per_s = s.servo_max_speed_m_per_s;
+    w.set_wall_servo(bottom, servo);
+    r.target_normal_stress_Pa = s.normal_stress_Pa;
+    // Fit the specimen into the box: centres inside the box leave spheres
+    // poking through the walls; push them in with calm cycles (velocities
+    // zeroed, PFC `calm`) under a tolerant overlap guard.
+    pr.fit_steps = r.consolidation_steps = calm_into_walls(w);
+    pr.consolidation_first_step = w.step_count();
+  }
   r.target_normal_stress_Pa = s.normal_stress_Pa;
-  auto normal_stress = [&] { return -dot(w.walls()[bottom].force, servo.direction) / area; };
 
-  // Fit the specimen into the box: centres inside the box leave spheres
-  // poking through the walls; push them in with calm cycles (velocities
-  // zeroed, PFC `calm`) under a tolerant overlap guard.
-  r.consolidation_steps += calm_into_walls(w);
+  // Every decision is taken at a check, a fixed number of steps into its
+  // phase, so a resume mid-chunk finishes the chunk first.
+  const long check = std::max<long>(100, s.record_interval_steps / 4);
+  CheckpointedCycling cyc(w, ck.path, ck.policy, [&] { return save_state(pr, seconds(), cyc); });
 
   // Consolidation: upper box fixed, servo on the bottom wall.
-  const long check = std::max<long>(100, s.record_interval_steps / 4);
-  while (r.consolidation_steps < s.consolidation_max_steps) {
-    w.cycle(check);
-    r.consolidation_steps += check;
-    const double err = std::abs(normal_stress() - s.normal_stress_Pa) / s.normal_stress_Pa;
-    if (err < s.consolidation_stress_tolerance &&
-        w.mean_unbalanced_force_ratio() < s.consolidation_ratio)
-      break;
-  }
-  auto height = [&] { return w.walls()[top].point.z - w.walls()[bottom].point.z; };
-  r.consolidated_height_m = height();
-  r.consolidated_normal_stress_Pa = normal_stress();
-  const long steps_before = w.step_count();
-
-  // Shearing: contact defaults for new contacts (paper: no adhesion for
-  // contacts made while shearing), then the upper box moves in -x.
-  if (s.ball_ball_during_shear) w.set_ball_ball_defaults(*s.ball_ball_during_shear);
-  for (std::size_t k : upper) w.set_wall_velocity(k, {-s.shear_rate_m_per_s, 0, 0});
-  const double x0 = w.walls()[top].point.x;
-  const double t_start = w.time();
-  const double strain_base = s.strain == StrainDefinition::height ? s.box.height_m : s.box.length_m;
-  const long sample = std::min<long>(10, s.record_interval_steps);
-  for (;;) {
-    // Stresses are averaged over the record interval (sampled every 10 steps).
-    double sum_sigma = 0, sum_fx = 0;
-    long samples = 0;
-    for (long done = 0; done < s.record_interval_steps; done += sample) {
-      w.cycle(std::min(sample, s.record_interval_steps - done));
-      sum_sigma += normal_stress();
-      for (std::size_t k : upper) sum_fx += w.walls()[k].force.x; // particles resist the -x motion
-      ++samples;
+  if (pr.phase == 0) {
+    const long fit_steps = pr.fit_steps;
+    for (;;) {
+      const long into = w.step_count() - pr.consolidation_first_step;
+      if (fit_steps + into >= s.consolidation_max_steps) break;
+      cyc.advance(check - into % check);
+      r.consolidation_steps = fit_steps + (w.step_count() - pr.consolidation_first_step);
+      const double err = std::abs(normal_stress() - s.normal_stress_Pa) / s.normal_stress_Pa;
+      if (err < s.consolidation_stress_tolerance &&
+          w.mean_unbalanced_force_ratio() < s.consolidation_ratio)
+        break;
+      cyc.at_check();
     }
+    r.consolidated_height_m = height();
+    r.consolidated_normal_stress_Pa = normal_stress();
+    // Shearing: contact defaults for new contacts (paper: no adhesion for
+    // contacts made while shearing), then the upper box moves in -x.
+    if (s.ball_ball_during_shear) w.set_ball_ball_defaults(*s.ball_ball_during_shear);
+    for (std::size_t k : upper) w.set_wall_velocity(k, {-s.shear_rate_m_per_s, 0, 0});
+    pr.x0 = w.walls()[top].point.x;
+    pr.t_start = w.time();
+    pr.shear_first_step = w.step_count();
+    pr.phase = 1;
+    cyc.write_now();
+  }
+
+  // Shearing. Stresses are averaged over each record interval, sampled every
+  // 10 steps.
+  const double strain_base = s.strain == StrainDefinition::height ? s.box.height_m : s.box.length_m;
+  const long rec = s.record_interval_steps;
+  const long sample = std::min<long>(10, rec);
+  const bool finished_before =
+      !r.curve.empty() && r.curve.back().shear_displacement_m >= s.max_shear_displacement_m;
+  while (!finished_before) {
+    const long into = (w.step_count() - pr.shear_first_step) % rec;
+    cyc.advance(std::min(rec, (into / sample + 1) * sample) - into);
+    pr.sum_sigma += normal_stress();
+    for (std::size_t k : upper) pr.sum_fx += w.walls()[k].force.x; // particles resist the -x motion
+    ++pr.samples;
+    if ((w.step_count() - pr.shear_first_step) % rec != 0) continue;
     ShearPoint p;
     p.step = w.step_count();
-    p.time_s = w.time() - t_start;
-    p.shear_displacement_m = x0 - w.walls()[top].point.x;
+    p.time_s = w.time() - pr.t_start;
+    p.shear_displacement_m = pr.x0 - w.walls()[top].point.x;
     p.shear_strain = p.shear_displacement_m / strain_base;
-    p.shear_stress_Pa = sum_fx / static_cast<double>(samples) / area;
-    p.normal_stress_Pa = sum_sigma / static_cast<double>(samples);
+    p.shear_stress_Pa = pr.sum_fx / static_cast<double>(pr.samples) / area;
+    p.normal_stress_Pa = pr.sum_sigma / static_cast<double>(pr.samples);
     p.vertical_displacement_m = height() - r.consolidated_height_m;
     const double zb = w.walls()[bottom].point.z, zt = w.walls()[top].point.z;
     p.porosity = w.measure_region(Box{{0, 0, zb}, {s.box.length_m, s.box.width_m, zt}}).porosity;
+    pr.sum_sigma = pr.sum_fx = 0;
+    pr.samples = 0;
     r.curve.push_back(p);
     r.worst_normal_stress_deviation =
         std::max(r.worst_normal_stress_deviation,
@@ -175,6 +291,7 @@ DirectShearResult run_direct_shear(World& w, const DirectShearSpec& s,
     }
     if (progress) progress(p, r);
     if (p.shear_displacement_m >= s.max_shear_displacement_m) break;
+    cyc.at_check();
   }
   for (std::size_t k : upper) w.set_wall_velocity(k, {});
 
@@ -190,6 +307,7 @@ DirectShearResult run_direct_shear(World& w, const DirectShearSpec& s,
   const auto& P = w.particles();
   const double d = d_end, L = s.box.length_m, W = s.box.width_m;
   const double zb = w.walls()[bottom].point.z, zt = w.walls()[top].point.z;
+  r.particles_lost = 0;
   for (std::size_t i = 0; i < P.size(); ++i) {
     const Vec3& x = P.position[i];
     const double rr = P.radius[i];
@@ -197,10 +315,13 @@ DirectShearResult run_direct_shear(World& w, const DirectShearSpec& s,
         x.z > zt + rr)
       ++r.particles_lost;
   }
-  r.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  r.particle_steps_per_s =
-      static_cast<double>(P.size()) *
-      static_cast<double>(w.step_count() - steps_before + r.consolidation_steps) / r.wall_seconds;
+  r.wall_seconds = pr.wall_seconds + seconds();
+  const double cyc_s = pr.cycling_seconds + cyc.cycling_seconds();
+  r.particle_steps_per_s = cyc_s > 0 ? (pr.particle_steps + cyc.particle_steps()) / cyc_s : 0.0;
+  if (!ck.path.empty()) {
+    std::error_code ec;
+    std::filesystem::remove(ck.path, ec); // finished: the result is the record
+  }
   return r;
 }
 

@@ -10,6 +10,7 @@
 
 #include "core/world.hpp"
 #include "physics/contact_properties.hpp"
+#include "procedures/checkpointed_cycling.hpp"
 
 #include <functional>
 #include <optional>
@@ -68,8 +69,9 @@ struct DirectShearResult {
   double residual_shear_stress_Pa = 0;      // mean over the last 20 % of the displacement
   double worst_normal_stress_deviation = 0; // max |sigma - target| / target while shearing
   std::size_t particles_lost = 0;           // outside the box at the end
-  double wall_seconds = 0;
-  double particle_steps_per_s = 0;
+  double wall_seconds = 0;         // consolidation and shearing, over every resumed part [s]
+  double particle_steps_per_s = 0; // while cycling
+  bool resumed = false;            // continued from a checkpoint
 };
 
 using ShearProgress = std::function<void(const ShearPoint&, const DirectShearResult&)>;
@@ -80,10 +82,23 @@ using ShearProgress = std::function<void(const ShearPoint&, const DirectShearRes
 void add_shear_box(World& world, const ShearBox& box, const ContactProperties& ball_wall,
                    double max_shear_displacement_m);
 
+// Checkpoints of a direct shear test (see procedures/checkpointed_cycling.hpp):
+// written by time or steps, at the start of shearing, and on SIGINT / SIGTERM
+// (then Interrupted is thrown). A finished test removes its checkpoint.
+struct DirectShearCheckpoints {
+  std::string path; // checkpoint file; empty = no checkpoints
+  CheckpointPolicy policy;
+};
+
 // Runs consolidation and shearing on `world`, which holds the specimen inside
-// the box (walls added here). Throws InputError for bad spec values.
+// the box (walls added here). If `checkpoints.path` names an existing file,
+// `world` must be freshly constructed instead: the World and the test's
+// progress are read from the checkpoint and the test goes on from there, bit
+// for bit as if it had never stopped (same thread count). Throws InputError
+// for bad spec values or an unreadable checkpoint.
 DirectShearResult run_direct_shear(World& world, const DirectShearSpec& spec,
-                                   const ShearProgress& progress = {});
+                                   const ShearProgress& progress = {},
+                                   const DirectShearCheckpoints& checkpoints = {});
 
 void validate(const DirectShearSpec& spec);
 

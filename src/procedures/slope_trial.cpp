@@ -296,8 +296,7 @@ SlopeTrialResult run_slope_trial(const SlopeScenario& sc, const SlopeTrialPlan& 
   const long chunk = ts.check_interval_steps;
   auto last_progress = Clock::now();
   long progress_steps = world.step_count();
-  CheckpointedCycling cyc(world, ckpt,
-                          {ts.checkpoint_interval_min, ts.checkpoint_interval_steps, 10}, chunk,
+  CheckpointedCycling cyc(world, ckpt, {ts.checkpoint_interval_min, ts.checkpoint_interval_steps},
                           [&] { return save_progress(pr, monitor ? &*monitor : nullptr); });
   auto advance = [&](long n) { cyc.advance(n); };
   auto after_chunk = [&] { cyc.at_check(); };

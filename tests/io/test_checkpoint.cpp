@@ -65,16 +65,22 @@ TEST(Checkpoint, ResumeIsBitForBit) {
   const long N = 1500;
 
   World a = make_column();
-  a.cycle(N);
-  write_checkpoint(a, path, "procedure-progress");
-  a.cycle(N); // A: 2N steps in one process (with the checkpoint's rebuild)
+  a.cycle(2 * N); // A: 2N steps in one go, no checkpoint
 
+  World w = make_column();
+  w.cycle(N);
+  ASSERT_FALSE(w.rebuild_pending()); // the checkpoint falls between rebuilds
+  write_checkpoint(w, path, "procedure-progress");
   World b;
   const LoadedCheckpoint info = read_checkpoint(b, path);
   EXPECT_EQ(info.procedure_state, "procedure-progress");
-  b.cycle(N);                                      // B: N steps after the resume
+  b.cycle(N);                                      // B: N steps, checkpoint, N steps after it
   ASSERT_GT(a.measure().ball_ball_contacts, 300u); // history matters
+  ASSERT_GT(a.neighbour_rebuilds(), 2);            // lists rebuilt after the resume, too
   expect_identical(a, b);
+  // Writing a checkpoint does not perturb the World that wrote it.
+  w.cycle(N);
+  expect_identical(a, w);
 }
 
 TEST(Checkpoint, CorruptOrTruncatedFileIsRefused) {

@@ -4,13 +4,18 @@
 // of mu = 0.5 with rolling resistance. The shear rate is raised to
 // keep CI short (20 mm/s); the paper-size runs use 200 mm/min (ctest -L long).
 #include "core/errors.hpp"
+#include "core/interrupt.hpp"
 #include "procedures/direct_shear.hpp"
 #include "procedures/paper_material.hpp"
 #include "procedures/specimen.hpp"
 
 #include <cmath>
+#include <csignal>
+#include <cstring>
+#include <filesystem>
 #include <gtest/gtest.h>
 #include <numbers>
+#include <unistd.h>
 
 using namespace centridem;
 
@@ -21,7 +26,7 @@ struct Outcome {
   double peak_angle_deg;
 };
 
-Outcome shear(const ContactProperties& ball_ball, double sigma) {
+void small_box(World& world, const ContactProperties& ball_ball) {
   SpecimenSpec spec;
   spec.bins = {{0.4e-3, 0.6e-3, 1.0}};
   spec.porosity = 0.40;
@@ -29,13 +34,12 @@ Outcome shear(const ContactProperties& ball_ball, double sigma) {
   spec.seed = 11;
   spec.brick_size_m = {3e-3, 3e-3, 3e-3};
   spec.region = Box{{0, 0, 0}, {6e-3, 6e-3, 3e-3}};
-  WorldSettings ws;
-  ws.local_damping = paper::local_damping;
-  World world(ws);
   build_specimen(spec, world);
   world.set_ball_ball_defaults(ball_ball);
   world.set_body_field(BodyField::scaled_gravity(1.0, 1.0));
+}
 
+DirectShearSpec small_test(double sigma) {
   DirectShearSpec s;
   s.box = {6e-3, 6e-3, 3e-3, 0.0};
   s.normal_stress_Pa = sigma;
@@ -43,6 +47,15 @@ Outcome shear(const ContactProperties& ball_ball, double sigma) {
   s.max_shear_displacement_m = 0.45e-3; // 15 % of the height: past the peak
   s.ball_wall = paper::ball_wall(0.0);
   s.record_interval_steps = 500;
+  return s;
+}
+
+Outcome shear(const ContactProperties& ball_ball, double sigma) {
+  WorldSettings ws;
+  ws.local_damping = paper::local_damping;
+  World world(ws);
+  small_box(world, ball_ball);
+  const DirectShearSpec s = small_test(sigma);
   Outcome o{run_direct_shear(world, s), 0.0};
   o.peak_angle_deg = std::atan(o.result.peak_shear_stress_Pa / sigma) * 180.0 / std::numbers::pi;
   return o;
@@ -94,4 +107,73 @@ TEST(DirectShear, BadSpecIsRejected) {
   s.ball_wall = paper::ball_wall();
   s.max_shear_displacement_m = 0.02; // longer than the 13.2 mm box
   EXPECT_THROW(validate(s), InputError);
+}
+
+// A test stopped by SIGINT (once in consolidation, once while shearing) and
+// resumed each time in a fresh World from its checkpoint ends bit for bit like
+// one that never stopped: same curve, same final positions.
+TEST(DirectShear, StoppedAndResumedTestEndsBitForBitLikeAnUninterruptedOne) {
+  const ContactProperties sand = paper::ball_ball(1.2e-4);
+  DirectShearSpec s = small_test(100e3);
+  s.max_shear_displacement_m = 0.1e-3;
+  s.ball_ball_during_shear = paper::ball_ball(0.0); // the humid rule: F0 only before shearing
+  WorldSettings ws;
+  ws.local_damping = paper::local_damping;
+
+  World a(ws);
+  small_box(a, sand);
+  const DirectShearResult ra = run_direct_shear(a, s);
+
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() /
+                                    ("centridem_shear_resume_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  DirectShearCheckpoints ck{(dir / "checkpoint.bin").string(), {}};
+  ck.policy.interval_min = 0;
+  install_stop_handlers();
+  int stops = 0;
+  DirectShearResult rb;
+  std::vector<Vec3> final_b;
+  for (int part = 0;; ++part) {
+    World b(ws);
+    if (part == 0) small_box(b, sand);
+    // Stop 1: during consolidation (after some cycling); stop 2: while shearing.
+    long stop_at = part == 0 ? ra.curve.front().step - 5000 : part == 1 ? ra.curve[4].step : -1;
+    const ShearProgress watch = [&](const ShearPoint& p, const DirectShearResult&) {
+      if (stop_at > 0 && p.step >= stop_at) set_stop_signal(SIGINT);
+    };
+    if (part == 0) {
+      // Consolidation has no progress callback: ask to stop from the start;
+      // the test writes its checkpoint at the first pending rebuild.
+      set_stop_signal(SIGINT);
+    }
+    try {
+      rb = run_direct_shear(b, s, watch, ck);
+      final_b = b.particles().position;
+      set_stop_signal(0);
+      break;
+    } catch (const Interrupted& e) {
+      set_stop_signal(0);
+      ++stops;
+      ASSERT_TRUE(std::filesystem::exists(ck.path)) << e.what();
+    }
+    ASSERT_LT(part, 5);
+  }
+  EXPECT_GE(stops, 2);
+  EXPECT_TRUE(rb.resumed);
+  EXPECT_FALSE(std::filesystem::exists(ck.path)) << "a finished test removes its checkpoint";
+  ASSERT_EQ(ra.curve.size(), rb.curve.size());
+  for (std::size_t k = 0; k < ra.curve.size(); ++k) {
+    EXPECT_EQ(ra.curve[k].step, rb.curve[k].step);
+    EXPECT_EQ(ra.curve[k].shear_stress_Pa, rb.curve[k].shear_stress_Pa) << k;
+    EXPECT_EQ(ra.curve[k].normal_stress_Pa, rb.curve[k].normal_stress_Pa) << k;
+    EXPECT_EQ(ra.curve[k].vertical_displacement_m, rb.curve[k].vertical_displacement_m) << k;
+  }
+  EXPECT_EQ(ra.consolidation_steps, rb.consolidation_steps);
+  EXPECT_EQ(ra.peak_shear_stress_Pa, rb.peak_shear_stress_Pa);
+  // Final positions: the particle order is the same (both rebuilt at the
+  // same steps), so compare array to array.
+  ASSERT_EQ(a.particles().size(), final_b.size());
+  EXPECT_EQ(
+      0, std::memcmp(a.particles().position.data(), final_b.data(), final_b.size() * sizeof(Vec3)));
+  std::filesystem::remove_all(dir);
 }
