@@ -3,6 +3,7 @@
 #include "app/jobs.hpp"
 
 #include "core/errors.hpp"
+#include "core/interrupt.hpp"
 #include "core/world.hpp"
 #include "io/plot.hpp"
 #include "io/shear_config.hpp"
@@ -57,9 +58,14 @@ void write_text(const fs::path& path, const std::string& text) {
   if (!out) throw std::runtime_error("cannot write " + path.string());
 }
 
-// One pressure: builds the specimen into a fresh World, runs the test,
-// writes shear_<kPa>kPa.csv and shear_<kPa>kPa.json (the result with its
-// curve, read back by the parent).
+fs::path checkpoint_path(const fs::path& out, double sigma_Pa) {
+  return out / (run_stem(sigma_Pa) + ".checkpoint.bin");
+}
+
+// One pressure: builds the specimen into a fresh World (or reads the run's
+// checkpoint), runs the test, writes shear_<kPa>kPa.csv and
+// shear_<kPa>kPa.json (the result with its curve, read back by the parent;
+// its presence marks the run finished).
 void run_one(const ShearScenario& sc, double sigma, int threads, const fs::path& out,
              bool write_specimen, double progress_interval_s) {
   const auto t0 = Clock::now();
@@ -68,19 +74,29 @@ void run_one(const ShearScenario& sc, double sigma, int threads, const fs::path&
     fmt::print(stderr, "[{:7.1f} s] {}: {}\n", seconds_since(t0), tag, line);
     std::fflush(stderr);
   };
+  if (fs::exists(out / (run_stem(sigma) + ".json"))) {
+    log("finished earlier; read from " + (out / (run_stem(sigma) + ".json")).string());
+    return;
+  }
   WorldSettings ws;
   ws.local_damping = sc.local_damping;
   ws.threads = threads;
   World world(ws);
-  const BuiltSpecimen built = build_specimen(sc.specimen, world, log, threads);
-  if (write_specimen)
-    write_specimen_outputs(world, built, sc.specimen, (out / "specimen").string());
-  world.set_local_damping(sc.local_damping);
-  world.set_ball_ball_defaults(sc.ball_ball);
-  world.set_body_field(BodyField::scaled_gravity(sc.g_level, 1.0));
   const DirectShearSpec spec = sc.run_spec(sigma);
-  log(fmt::format("{} particles; consolidating to {:g} kPa", world.particles().size(),
-                  sigma / 1000));
+  const DirectShearCheckpoints ck{checkpoint_path(out, sigma).string(),
+                                  {sc.checkpoint_interval_min, 0}};
+  if (fs::exists(ck.path)) {
+    log("resuming from " + ck.path);
+  } else {
+    const BuiltSpecimen built = build_specimen(sc.specimen, world, log, threads);
+    if (write_specimen)
+      write_specimen_outputs(world, built, sc.specimen, (out / "specimen").string());
+    world.set_local_damping(sc.local_damping);
+    world.set_ball_ball_defaults(sc.ball_ball);
+    world.set_body_field(BodyField::scaled_gravity(sc.g_level, 1.0));
+    log(fmt::format("{} particles; consolidating to {:g} kPa", world.particles().size(),
+                    sigma / 1000));
+  }
 
   auto last = Clock::now();
   long last_steps = world.step_count();
@@ -89,8 +105,9 @@ void run_one(const ShearScenario& sc, double sigma, int threads, const fs::path&
     const auto now = Clock::now();
     if (!first) {
       first = {now, p.shear_displacement_m};
-      log(fmt::format("consolidated in {} steps (sigma {:.1f} kPa); shearing",
-                      r.consolidation_steps, r.consolidated_normal_stress_Pa / 1000));
+      if (r.curve.size() == 1)
+        log(fmt::format("consolidated in {} steps (sigma {:.1f} kPa); shearing",
+                        r.consolidation_steps, r.consolidated_normal_stress_Pa / 1000));
     }
     const double dt = std::chrono::duration<double>(now - last).count();
     if (dt < progress_interval_s) return;
@@ -108,7 +125,7 @@ void run_one(const ShearScenario& sc, double sigma, int threads, const fs::path&
     last = now;
     last_steps = world.step_count();
   };
-  const DirectShearResult r = run_direct_shear(world, spec, progress);
+  const DirectShearResult r = run_direct_shear(world, spec, progress, ck);
 
   std::string csv = "step,time_s,shear_displacement_m,shear_strain,shear_stress_Pa,"
                     "normal_stress_Pa,vertical_displacement_m,porosity\n";
@@ -137,9 +154,11 @@ void run_one(const ShearScenario& sc, double sigma, int threads, const fs::path&
                       {"particles_lost", r.particles_lost},
                       {"wall_seconds", r.wall_seconds},
                       {"particle_steps_per_s", r.particle_steps_per_s},
-                      {"total_seconds_with_specimen", seconds_since(t0)},
+                      {"resumed", r.resumed},
                       {"curve_strain_tau_dz", curve}};
-  write_text(out / (run_stem(sigma) + ".json"), j.dump(1) + "\n");
+  const fs::path tmp = out / (run_stem(sigma) + ".json.tmp");
+  write_text(tmp, j.dump(1) + "\n");
+  fs::rename(tmp, out / (run_stem(sigma) + ".json")); // the run is finished once this exists
   log(fmt::format(
       "done: peak {:.1f} kPa ({:.1f} deg) at strain {:.3f}, residual {:.1f} kPa "
       "({:.1f} deg), worst sigma deviation {:.1f} %, {} lost, {}",
@@ -217,27 +236,64 @@ void write_plots(const ShearScenario& sc, const std::vector<double>& sigmas,
 
 int run_shear_command(const ShearCommandOptions& o) {
   const auto t0 = Clock::now();
-  const ShearScenario sc = load_shear_scenario(o.scenario);
+  install_stop_handlers();
   if (o.jobs < 1) throw InputError("--jobs", std::to_string(o.jobs), "must be >= 1");
-  std::vector<double> sigmas = sc.normal_stresses_Pa;
-  if (!o.pressures_kPa.empty()) {
-    sigmas.clear();
-    for (double p : o.pressures_kPa) {
-      if (!(p > 0) || !std::isfinite(p))
-        throw InputError("--pressure", fmt::format("{:g}", p), "a normal stress > 0 [kPa]");
-      sigmas.push_back(p * 1000);
-      validate(sc.run_spec(sigmas.back()));
+  ShearScenario sc;
+  std::vector<double> sigmas;
+  fs::path out;
+  if (!o.resume_dir.empty()) {
+    out = o.resume_dir;
+    if (!o.scenario.empty() || !o.out_dir.empty() || !o.pressures_kPa.empty())
+      throw InputError("--resume", o.resume_dir,
+                       "continues a run folder as it was started: give no scenario, --out or "
+                       "--pressure with it");
+    if (!fs::exists(out / "scenario.toml") || !fs::exists(out / "pressures.json"))
+      throw InputError("--resume", o.resume_dir,
+                       "not a shear run folder (scenario.toml and pressures.json missing)");
+    sc = load_shear_scenario((out / "scenario.toml").string());
+    try {
+      sigmas =
+          read_json(out / "pressures.json").at("normal_stresses_Pa").get<std::vector<double>>();
+    } catch (const nlohmann::json::exception& e) {
+      throw InputError("--resume", (out / "pressures.json").string(),
+                       std::string("a pressures.json written by centridem shear (") + e.what() +
+                           ")");
     }
+    for (double s : sigmas) validate(sc.run_spec(s));
+    fmt::print(stderr, "centridem shear: resuming {}\n", out.string());
+  } else {
+    if (o.scenario.empty())
+      throw InputError("scenario", "(missing)", "a scenario file, or --resume RUN_DIR");
+    sc = load_shear_scenario(o.scenario);
+    sigmas = sc.normal_stresses_Pa;
+    if (!o.pressures_kPa.empty()) {
+      sigmas.clear();
+      for (double p : o.pressures_kPa) {
+        if (!(p > 0) || !std::isfinite(p))
+          throw InputError("--pressure", fmt::format("{:g}", p), "a normal stress > 0 [kPa]");
+        sigmas.push_back(p * 1000);
+        validate(sc.run_spec(sigmas.back()));
+      }
+    }
+    std::string out_s = o.out_dir;
+    if (out_s.empty()) {
+      std::string stem = fs::path(o.scenario).stem().string();
+      if (stem.empty()) stem = "scenario";
+      out_s = "runs/" + stem + "_shear";
+    }
+    out = out_s;
+    fs::create_directories(out);
+    for (double s : sigmas)
+      if (fs::exists(checkpoint_path(out, s)))
+        throw InputError("--out", out.string(),
+                         "holds an unfinished shear run (" + checkpoint_path(out, s).string() +
+                             "): continue it with `centridem shear --resume " + out.string() +
+                             "`, or choose another folder");
+    for (double s : sigmas) fs::remove(out / (run_stem(s) + ".json")); // stale results
+    write_text(out / "scenario.toml", resolved_shear_toml(sc));
+    write_text(out / "pressures.json",
+               nlohmann::json{{"normal_stresses_Pa", sigmas}}.dump(1) + "\n");
   }
-  std::string out_s = o.out_dir;
-  if (out_s.empty()) {
-    std::string stem = fs::path(o.scenario).stem().string();
-    if (stem.empty()) stem = "scenario";
-    out_s = "runs/" + stem + "_shear";
-  }
-  const fs::path out(out_s);
-  fs::create_directories(out);
-  write_text(out / "scenario.toml", resolved_shear_toml(sc));
   const int threads = o.threads >= 0 ? o.threads : sc.threads;
   const int jobs = std::min<int>(o.jobs, static_cast<int>(sigmas.size()));
   fmt::print(
@@ -252,7 +308,6 @@ int run_shear_command(const ShearCommandOptions& o) {
       }(),
       jobs, threads == 0 ? std::string("default") : std::to_string(threads), out.string());
   std::fflush(stderr);
-  for (double s : sigmas) fs::remove(out / (run_stem(s) + ".json")); // stale results
 
   int failed_rc = 0;
   const std::vector<int> codes = run_jobs(
@@ -261,6 +316,8 @@ int run_shear_command(const ShearCommandOptions& o) {
       [&](std::size_t k) { return "the " + kpa_label(sigmas[k]) + " kPa run"; });
   for (int code : codes)
     if (code > 0 && failed_rc == 0) failed_rc = code;
+  if (stop_signal() && failed_rc == 0) failed_rc = 128 + stop_signal();
+  const bool interrupted = failed_rc > 128;
 
   // Collect.
   std::vector<double> done_sigmas;
@@ -272,6 +329,12 @@ int run_shear_command(const ShearCommandOptions& o) {
     runs.push_back(read_json(p));
   }
   if (runs.empty()) {
+    if (interrupted) {
+      fmt::print(stderr,
+                 "centridem shear: interrupted; continue with `centridem shear --resume {}`\n",
+                 out.string());
+      return failed_rc;
+    }
     if (failed_rc == 3) throw InstabilityError("every run failed (see the messages above)");
     throw std::runtime_error("no run finished (see the messages above)");
   }
@@ -308,8 +371,13 @@ int run_shear_command(const ShearCommandOptions& o) {
             {"r_squared", f.r_squared}};
   };
   summary["mohr_coulomb"] = {{"peak", fit_json(peak)}, {"residual", fit_json(residual)}};
+  summary["unfinished_Pa"] = [&] {
+    std::vector<double> u;
+    for (double s : sigmas)
+      if (std::find(done_sigmas.begin(), done_sigmas.end(), s) == done_sigmas.end()) u.push_back(s);
+    return u;
+  }();
   write_text(out / "summary.json", summary.dump(2) + "\n");
-  for (double s : done_sigmas) fs::remove(out / (run_stem(s) + ".json"));
 
   fmt::print("{:>8} {:>10} {:>9} {:>10} {:>10} {:>9} {:>8} {:>5}\n", "sigma", "peak", "phi_peak",
              "strain_pk", "residual", "phi_res", "sig_dev", "lost");
@@ -330,6 +398,13 @@ int run_shear_command(const ShearCommandOptions& o) {
              "scenario.toml ({})\n",
              out.string(), format_duration(seconds_since(t0)));
   std::fflush(stdout);
+  if (interrupted) {
+    fmt::print(stderr,
+               "centridem shear: interrupted with {} of {} runs finished; continue with "
+               "`centridem shear --resume {}`\n",
+               runs.size(), sigmas.size(), out.string());
+    return failed_rc;
+  }
   if (failed_rc != 0) {
     fmt::print(stderr, "centridem shear: {} of {} runs failed\n", sigmas.size() - runs.size(),
                sigmas.size());
@@ -343,9 +418,10 @@ CLI::App* add_shear_subcommand(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand(
       "shear", "numerical direct shear tests, one per normal pressure (docs/shear.md)");
   cmd->add_option("scenario", o->scenario,
-                  "scenario file (TOML) with [specimen], [contact.ball_ball] and [shear]")
-      ->required();
+                  "scenario file (TOML) with [specimen], [contact.ball_ball] and [shear]");
   cmd->add_option("--out", o->out_dir, "output folder (default: runs/<scenario stem>_shear)");
+  cmd->add_option("--resume", o->resume_dir,
+                  "continue the runs in this folder from their last checkpoints");
   cmd->add_option("--jobs", o->jobs, "pressures run at once, as child processes (default 1)")
       ->check(CLI::PositiveNumber);
   cmd->add_option(
@@ -360,6 +436,10 @@ CLI::App* add_shear_subcommand(CLI::App& app) {
       rc = run_shear_command(*o);
     } catch (...) {
       rc = report_current_exception("");
+      if (rc > 128)
+        fmt::print(stderr, "centridem shear: continue with `centridem shear --resume {}`\n",
+                   o->resume_dir.empty() ? (o->out_dir.empty() ? "RUN_DIR" : o->out_dir)
+                                         : o->resume_dir);
     }
     if (rc != 0) {
       std::fflush(stdout);

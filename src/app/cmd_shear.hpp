@@ -1,11 +1,15 @@
-// `centridem shear SCENARIO.toml [--out DIR] [--jobs N] [--pressure KPA]...`:
-// the numerical direct shear test (Tao et al. section 3.1; docs/shear.md).
+// `centridem shear SCENARIO.toml [--out DIR] [--jobs N] [--pressure KPA]...`
+// and `centridem shear --resume DIR [--jobs N]`: the numerical direct shear
+// test (Tao et al. section 3.1; docs/shear.md).
 // One run per normal pressure, each on the same specimen (same seed) built
 // into a fresh World; with --jobs N > 1 the runs are forked child processes
 // (one pressure each), else they run in sequence. Writes to DIR:
 // shear_<kPa>kPa.csv per pressure, shear_curves.png, mohr_coulomb.png,
-// summary.json and scenario.toml (the resolved scenario). Progress lines go
-// to stderr at most every 10 s.
+// summary.json, scenario.toml (the resolved scenario) and pressures.json (the
+// pressures run, read by --resume). Each run checkpoints into
+// shear_<kPa>kPa.checkpoint.bin (every shear.checkpoint_interval_min, at the
+// start of shearing, on SIGINT/SIGTERM); finished runs leave
+// shear_<kPa>kPa.json. Progress lines go to stderr at most every 10 s.
 #pragma once
 
 #include <string>
@@ -20,15 +24,17 @@ namespace centridem {
 struct ShearCommandOptions {
   std::string scenario;
   std::string out_dir;               // "" = runs/<scenario stem>_shear
+  std::string resume_dir;            // continue the runs in this folder
   int jobs = 1;                      // parallel runs (child processes)
   std::vector<double> pressures_kPa; // empty: the scenario's list
   int threads = -1;                  // per run; < 0: the scenario's shear.threads
   double progress_interval_s = 10.0; // seconds between progress lines
 };
 
-// Runs the command; returns the exit code (0). Throws InputError for bad
-// input and InstabilityError when a run goes unstable (with --jobs > 1: when
-// any child failed, with the first failure's class).
+// Runs the command; returns the exit code (0; 128 + signal when stopped, with
+// checkpoints written). Throws InputError for bad input and InstabilityError
+// when a run goes unstable (with --jobs > 1: when any child failed, with the
+// first failure's class).
 int run_shear_command(const ShearCommandOptions& options);
 
 // Registers the `shear` subcommand on `app` (errors: exit 2 bad input,

@@ -1,7 +1,9 @@
 // Stop requests: SIGINT and SIGTERM set a flag that long procedures poll
 // between chunks of cycling (never per step); they then write a checkpoint
-// and throw Interrupted. A second signal of the same kind while the flag is
-// set kills the process the default way (an impatient Ctrl-C still works).
+// and throw Interrupted. A second signal of the same kind at least a second
+// after the first kills the process the default way (an impatient Ctrl-C
+// still works); one within the second is taken as the same request (Ctrl-C
+// reaches forked jobs both from the terminal and from the parent).
 #pragma once
 
 namespace centridem {

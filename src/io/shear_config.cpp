@@ -49,7 +49,8 @@ const Keys kShearKeys = {"box",
                          "record_interval_steps",
                          "local_damping",
                          "g_level",
-                         "threads"};
+                         "threads",
+                         "checkpoint_interval_min"};
 const Keys kBoxKeys = {"length_m", "width_m", "height_m", "plate_length_m"};
 const Keys kStrainNames = {"height", "length"};
 
@@ -245,6 +246,10 @@ ShearScenario parse_shear_scenario(std::string_view text, const std::string& sou
           t, P, "threads", [](long x) { return x >= 0 && x <= 1024; },
           "OpenMP threads per run: 0 (the OpenMP default) to 1024"))
     sc.threads = static_cast<int>(*v);
+  if (auto v = opt_number(t, P, "checkpoint_interval_min", non_negative,
+                          "wall-clock minutes between checkpoints: >= 0 (0 = only on "
+                          "SIGINT/SIGTERM and at the start of shearing)"))
+    sc.checkpoint_interval_min = *v;
   validate(sc.run_spec(sc.normal_stresses_Pa.front())); // cross-key checks, dotted keys
   return sc;
 }
@@ -293,6 +298,7 @@ std::string resolved_shear_toml(const ShearScenario& sc) {
                    s.consolidation_max_steps, s.record_interval_steps);
   o += fmt::format("local_damping = {}\ng_level = {}\nthreads = {}\n", num(sc.local_damping),
                    num(sc.g_level), sc.threads);
+  o += fmt::format("checkpoint_interval_min = {}\n", num(sc.checkpoint_interval_min));
   return o;
 }
 

@@ -31,6 +31,7 @@ struct ShearScenario {
   double local_damping = 0.7;             // Cundall local damping (Table 1) [-]
   double g_level = 1.0;                   // gravity n g along -z [-]
   int threads = 1;                        // OpenMP threads per run (0 = the OpenMP default)
+  double checkpoint_interval_min = 10;    // wall-clock minutes between checkpoints (0 = none) [min]
 
   // The spec of one run at `normal_stress_Pa` (ball_ball_during_shear set
   // when during_shear names any key).
