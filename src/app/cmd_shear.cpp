@@ -101,6 +101,19 @@ void run_one(const ShearScenario& sc, double sigma, int threads, const fs::path&
   auto last = Clock::now();
   long last_steps = world.step_count();
   std::optional<std::pair<Clock::time_point, double>> first; // wall time, displacement
+  // The curve so far, rewritten with every progress line: a long run can be
+  // watched (and plotted) while it goes on.
+  auto write_csv = [&](const std::vector<ShearPoint>& curve) {
+    std::string csv = "step,time_s,shear_displacement_m,shear_strain,shear_stress_Pa,"
+                      "normal_stress_Pa,vertical_displacement_m,porosity\n";
+    for (const ShearPoint& p : curve)
+      csv += fmt::format("{},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g}\n", p.step, p.time_s,
+                         p.shear_displacement_m, p.shear_strain, p.shear_stress_Pa,
+                         p.normal_stress_Pa, p.vertical_displacement_m, p.porosity);
+    const fs::path tmp = out / (run_stem(sigma) + ".csv.tmp");
+    write_text(tmp, csv);
+    fs::rename(tmp, out / (run_stem(sigma) + ".csv"));
+  };
   const ShearProgress progress = [&](const ShearPoint& p, const DirectShearResult& r) {
     const auto now = Clock::now();
     if (!first) {
@@ -124,19 +137,14 @@ void run_one(const ShearScenario& sc, double sigma, int threads, const fs::path&
                     format_duration(eta)));
     last = now;
     last_steps = world.step_count();
+    write_csv(r.curve);
   };
   const DirectShearResult r = run_direct_shear(world, spec, progress, ck);
 
-  std::string csv = "step,time_s,shear_displacement_m,shear_strain,shear_stress_Pa,"
-                    "normal_stress_Pa,vertical_displacement_m,porosity\n";
   nlohmann::json curve = nlohmann::json::array();
-  for (const ShearPoint& p : r.curve) {
-    csv += fmt::format("{},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g}\n", p.step, p.time_s,
-                       p.shear_displacement_m, p.shear_strain, p.shear_stress_Pa,
-                       p.normal_stress_Pa, p.vertical_displacement_m, p.porosity);
+  for (const ShearPoint& p : r.curve)
     curve.push_back({p.shear_strain, p.shear_stress_Pa, p.vertical_displacement_m});
-  }
-  write_text(out / (run_stem(sigma) + ".csv"), csv);
+  write_csv(r.curve);
   nlohmann::json j = {{"normal_stress_target_Pa", r.target_normal_stress_Pa},
                       {"particles", world.particles().size()},
                       {"consolidation_steps", r.consolidation_steps},
