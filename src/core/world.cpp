@@ -339,8 +339,14 @@ CellGrid make_grid(const std::vector<Vec3>& x, std::span<const std::uint32_t> wh
 void World::rebuild(std::vector<std::uint32_t> candidates) {
   const std::size_t old_n = p_.size();
   const std::size_t n = candidates.size();
-  skin_cached_ = 0.0; // recomputed below from the kept particles' radii
-  const double rmax = n ? *std::max_element(p_.radius.begin(), p_.radius.end()) : 0.0;
+  // Radii of the kept particles only (remove_particles passes the kept ones):
+  // the skin and the cell size must not depend on particles being removed.
+  double rmin = std::numeric_limits<double>::infinity(), rmax = 0.0;
+  for (std::uint32_t k : candidates) {
+    rmin = std::min(rmin, p_.radius[k]);
+    rmax = std::max(rmax, p_.radius[k]);
+  }
+  skin_cached_ = n ? 0.5 * rmin : 0.0;
   const double cut = skin() + cutoff_extra_;
   // Wrap periodic positions into the box (only here, so that image codes stay
   // valid between rebuilds).
@@ -579,7 +585,6 @@ void World::rebuild(std::vector<std::uint32_t> candidates) {
   bb_ = std::move(bb);
   bw_ = std::move(bw);
   position_at_build_ = p_.position;
-  skin_cached_ = n ? 0.5 * *std::min_element(p_.radius.begin(), p_.radius.end()) : 0.0;
   std::fill(wall_motion_since_build_.begin(), wall_motion_since_build_.end(), Vec3{});
   for (std::size_t k = 0; k < walls_.size(); ++k) wall_point_at_build_[k] = walls_[k].point;
   dirty_ = false;
@@ -588,11 +593,14 @@ void World::rebuild(std::vector<std::uint32_t> candidates) {
 
 World::BuildState World::build_state() const {
   const bool pending = dirty_ || bb_.row_offset.size() != p_.size() + 1;
-  if (pending) return {};
-  return {false, position_at_build_, wall_point_at_build_, wall_motion_since_build_};
+  if (pending) return {true, {}, {}, {}, cutoff_extra_};
+  return {false, position_at_build_, wall_point_at_build_, wall_motion_since_build_, cutoff_extra_};
 }
 
 void World::restore_build_state(const BuildState& s) {
+  // The cutoff grows with every property set ever registered; the resumed
+  // World may not have seen them all.
+  cutoff_extra_ = std::max(cutoff_extra_, s.cutoff_extra_m);
   if (s.pending) {
     dirty_ = true;
     return;
@@ -615,8 +623,15 @@ void World::restore_build_state(const BuildState& s) {
   }
   p_.position = s.positions;
   rebuild_sorted();
-  if (p_.id != ids)
-    throw std::logic_error("restore_build_state: the particles were not in rebuild order");
+  if (p_.id != ids) {
+    // Not expected (the sort leaves sorted particles in place); should it
+    // happen, the run goes on correctly, in the new order (not bit for bit).
+    std::unordered_map<std::int64_t, std::size_t> was;
+    for (std::size_t k = 0; k < ids.size(); ++k) was[ids[k]] = k;
+    std::vector<Vec3> reordered(now.size());
+    for (std::size_t k = 0; k < p_.size(); ++k) reordered[k] = now[was.at(p_.id[k])];
+    now = std::move(reordered);
+  }
   p_.position = std::move(now);
   for (std::size_t k = 0; k < walls_.size(); ++k) walls_[k].point = walls_now[k];
   wall_motion_since_build_ = s.wall_motion;

@@ -202,6 +202,7 @@ public:
     std::vector<Vec3> positions;   // particle positions at the last rebuild [m]
     std::vector<Vec3> wall_points; // wall reference points at the last rebuild [m]
     std::vector<Vec3> wall_motion; // wall displacement since the last rebuild [m]
+    double cutoff_extra_m = 0;     // largest attraction range of any property set so far [m]
   };
   BuildState build_state() const;
   // Rebuilds the lists from `s` (call after the particles, walls and

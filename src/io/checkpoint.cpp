@@ -116,7 +116,7 @@ void write_checkpoint(const World& world, const std::string& path,
   w.vec(world.contact_records());
   const World::BuildState b = world.build_state();
   w.pod(static_cast<std::uint8_t>(b.pending ? 1 : 0));
-  w.vec(b.positions), w.vec(b.wall_points), w.vec(b.wall_motion);
+  w.vec(b.positions), w.vec(b.wall_points), w.vec(b.wall_motion), w.pod(b.cutoff_extra_m);
   w.str(procedure_state);
 
   std::string payload = std::move(w.data());
@@ -217,6 +217,7 @@ LoadedCheckpoint read_checkpoint(World& world, const std::string& path) {
   World::BuildState b;
   b.pending = r.pod<std::uint8_t>() != 0;
   b.positions = r.vec<Vec3>(), b.wall_points = r.vec<Vec3>(), b.wall_motion = r.vec<Vec3>();
+  b.cutoff_extra_m = r.pod<double>();
   LoadedCheckpoint out;
   out.procedure_state = r.str();
   if (!r.done()) r.fail("trailing bytes");

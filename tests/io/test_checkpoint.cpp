@@ -5,6 +5,7 @@
 #include "io/checkpoint.hpp"
 #include "procedures/paper_material.hpp"
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <gtest/gtest.h>
@@ -81,6 +82,46 @@ TEST(Checkpoint, ResumeIsBitForBit) {
   // Writing a checkpoint does not perturb the World that wrote it.
   w.cycle(N);
   expect_identical(a, w);
+}
+
+// After particles are removed (the excavation of a slope), the lists are
+// rebuilt from the kept particles only: a checkpoint taken later resumes bit
+// for bit even when the smallest and the largest particle (which set the
+// skin and the cell size) were among the removed.
+TEST(Checkpoint, ResumeAfterRemovingTheExtremeParticlesIsBitForBit) {
+  const auto dir = std::filesystem::temp_directory_path() / "centridem_ckpt_test";
+  std::filesystem::create_directories(dir);
+  const std::string path = (dir / "removed.ckpt").string();
+  const long N = 800;
+  auto run_to_removal = [&] {
+    World w = make_column();
+    // A large and a small grain on top: they set the cell size and the skin
+    // until they are removed.
+    w.add_particle({1.2e-3, 2.1e-3, 7.5e-3}, 3.2e-4, paper::density_kg_m3);
+    w.add_particle({3.0e-3, 2.1e-3, 7.5e-3}, 1.0e-4, paper::density_kg_m3);
+    w.cycle(N);
+    const auto& r = w.particles().radius;
+    const auto [small, large] = std::minmax_element(r.begin(), r.end());
+    const std::size_t smallest = static_cast<std::size_t>(small - r.begin());
+    const std::size_t largest = static_cast<std::size_t>(large - r.begin());
+    const double top = 0.6 * 4.6e-4 * 14 * 0.8;
+    w.remove_particles([&](std::size_t i) {
+      return i == smallest || i == largest || w.particles().position[i].z > top;
+    });
+    return w;
+  };
+  World a = run_to_removal();
+  a.cycle(2 * N);
+
+  // The checkpoint right after the removal, before any later rebuild.
+  World w = run_to_removal();
+  w.cycle(1);
+  ASSERT_FALSE(w.rebuild_pending());
+  write_checkpoint(w, path);
+  World b;
+  read_checkpoint(b, path);
+  b.cycle(2 * N - 1);
+  expect_identical(a, b);
 }
 
 TEST(Checkpoint, CorruptOrTruncatedFileIsRefused) {

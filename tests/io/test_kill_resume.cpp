@@ -160,7 +160,7 @@ TEST_F(KillResume, SigkillAtRandomMomentsNeverLosesTheRun) {
     ::kill(r.pid, SIGKILL);
     const int code = wait_for(r);
     if (code == 0) break; // finished before the kill
-    ASSERT_EQ(code, 128 + SIGKILL);
+    ASSERT_EQ(code, 128 + SIGKILL) << slurp(dir_ / fmt::format("kill{}.log", k));
     ++kills;
   }
   EXPECT_EQ(kills, 5) << "the trial finished before five kills; lengthen it";

@@ -276,8 +276,8 @@ size_m = [0.003, 0.003]
 
 [[stages]]
 name = "settle"
-steps = 300
-frames_every = 100
+steps = 600
+frames_every = 200
 measure_every = 50
 
 [[stages]]
@@ -285,7 +285,7 @@ name = "change"
 contact.ball_ball = { attraction_force_N = 0 }
 modify_contacts = { set = { rolling_friction = 0 } }
 walls = { x0 = { velocity_m_per_s = [0.001, 0, 0], contact = { friction = 0.1 } } }
-until_equilibrium = { ratio = 1e-12, max_steps = 200, check_interval = 50 }
+until_equilibrium = { ratio = 1e-30, max_steps = 200, check_interval = 50 } # below round-off: runs to max_steps
 frames_every = 100
 
 [[stages]]
@@ -310,7 +310,7 @@ TEST_F(StagedRunTest, ThreeStagesWriteTheRunFolder) {
   const RunReport r = run_scenario(sc, o);
 
   ASSERT_EQ(r.stages.size(), 3u);
-  EXPECT_EQ(r.stages[0].steps, 300);
+  EXPECT_EQ(r.stages[0].steps, 600);
   EXPECT_EQ(r.stages[1].steps, 200);
   EXPECT_FALSE(r.stages[1].reached_equilibrium);
   EXPECT_GT(r.stages[1].contacts_modified, 0u);
@@ -330,7 +330,7 @@ TEST_F(StagedRunTest, ThreeStagesWriteTheRunFolder) {
   const auto contacts = read_pvd(out / "contacts.pvd");
   std::size_t frames = 0;
   for (const StageReport& s : r.stages) frames += s.frames;
-  // settle: steps 0..300 every 100 -> 4; change: 100, 200 (its start is the
+  // settle: steps 0..600 every 200 -> 4; change: 100, 200 (its start is the
   // same step as settle's end) -> 2; excavate: its start replaces change's
   // end frame, then every 40 steps and the end.
   EXPECT_EQ(r.stages[0].frames, 4u);
@@ -382,7 +382,7 @@ TEST_F(StagedRunTest, ThreeStagesWriteTheRunFolder) {
     EXPECT_EQ(std::count(line.begin(), line.end(), ','), width) << line;
     ++rows;
   }
-  EXPECT_EQ(rows, 6 + 1 + 1); // settle every 50 steps; change and excavate at their ends
+  EXPECT_EQ(rows, 12 + 1 + 1); // settle every 50 steps; change and excavate at their ends
 
   // Stage particle files: x y z r vx vy vz per particle.
   std::istringstream last(read_file(out / "stage_02_excavate_particles.txt"));
@@ -426,7 +426,7 @@ TEST_F(StagedRunTest, BinaryExitsWithCode2OnBadInput) {
 
 TEST_F(StagedRunTest, BinaryRunsAScenario) {
   std::string quick = kThreeStages;
-  quick.replace(quick.find("steps = 300"), 11, "steps = 20");
+  quick.replace(quick.find("steps = 600"), 11, "steps = 20");
   const fs::path scenario = write("quick.toml", quick);
   const std::string cmd =
       fmt::format("'{}' run '{}' --out '{}' --threads 1 > '{}' 2>&1", CENTRIDEM_BINARY,
