@@ -309,10 +309,10 @@ int run_slope_command(const SlopeCommandOptions& opt) {
   if (!opt.resume_dir.empty()) {
     out = opt.resume_dir;
     if (!opt.scenario.empty() || !opt.g_levels.empty() || !opt.search.empty() ||
-        !opt.out_dir.empty())
+        !opt.schedule.empty() || !opt.out_dir.empty())
       throw InputError("--resume", opt.resume_dir,
                        "continues a run folder as it was started: give no scenario, --out, "
-                       "--g or --search with it");
+                       "--g, --search or --schedule with it");
     if (!fs::exists(out / "scenario.toml") || !fs::exists(out / "campaign.json"))
       throw InputError("--resume", opt.resume_dir,
                        "not a slope run folder (scenario.toml and campaign.json missing)");
@@ -338,8 +338,20 @@ int run_slope_command(const SlopeCommandOptions& opt) {
                                   sc.slope.total_height_m * opt.scale}};
     }
     camp.spec = sc.campaign;
-    if (!opt.g_levels.empty() && !opt.search.empty())
-      throw InputError("--g", "given with --search", "one of them");
+    if ((!opt.g_levels.empty()) + (!opt.search.empty()) + (!opt.schedule.empty()) > 1)
+      throw InputError("--g / --search / --schedule", "more than one given", "one of them");
+    if (!opt.schedule.empty()) {
+      const auto& q = opt.schedule;
+      if (q.size() != 3 || !(q[0] > 0) || !(q[1] > 0) || !(q[2] >= q[0]) || !std::isfinite(q[2]) ||
+          q[2] > 1e4)
+        throw InputError("--schedule", fmt::format("{}", fmt::join(q, " ")),
+                         "three g-levels START STEP MAX with 0 < START <= MAX <= 10000, STEP > 0");
+      camp.spec.kind = CampaignKind::schedule;
+      camp.spec.g_levels = {q[0]};
+      camp.spec.step_g = q[1];
+      camp.spec.max_g = q[2];
+      if (sc.campaign.kind != CampaignKind::schedule) camp.spec.max_slides = 3;
+    }
     if (!opt.g_levels.empty()) {
       camp.spec.kind = CampaignKind::list;
       camp.spec.g_levels.clear();
@@ -559,6 +571,10 @@ CLI::App* add_slope_subcommand(CLI::App& app) {
   cmd->add_option("--search", o->search,
                   "bracketing search for the critical g between STABLE and FAILED")
       ->expected(2);
+  cmd->add_option("--schedule", o->schedule,
+                  "one model, g raised from START by STEP up to MAX, each level held until "
+                  "equilibrium or a slide (the centrifuge test's own loading)")
+      ->expected(3);
   cmd->add_option("--scale", o->scale,
                   "run the slope at this size reduction factor s instead of slope's (smaller: "
                   "fewer particles, faster; the specimen's region follows)");
