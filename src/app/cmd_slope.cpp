@@ -309,10 +309,10 @@ int run_slope_command(const SlopeCommandOptions& opt) {
   if (!opt.resume_dir.empty()) {
     out = opt.resume_dir;
     if (!opt.scenario.empty() || !opt.g_levels.empty() || !opt.search.empty() ||
-        !opt.schedule.empty() || !opt.out_dir.empty())
+        !opt.schedule.empty() || !opt.set.empty() || !opt.out_dir.empty())
       throw InputError("--resume", opt.resume_dir,
                        "continues a run folder as it was started: give no scenario, --out, "
-                       "--g, --search or --schedule with it");
+                       "--g, --search, --schedule or --set with it");
     if (!fs::exists(out / "scenario.toml") || !fs::exists(out / "campaign.json"))
       throw InputError("--resume", opt.resume_dir,
                        "not a slope run folder (scenario.toml and campaign.json missing)");
@@ -323,7 +323,7 @@ int run_slope_command(const SlopeCommandOptions& opt) {
   } else {
     if (opt.scenario.empty())
       throw InputError("scenario", "(missing)", "a scenario file, or --resume RUN_DIR");
-    sc = load_slope_scenario(opt.scenario);
+    sc = load_slope_scenario(opt.scenario, opt.set);
     if (opt.scale != 0) {
       // The same slope at another size reduction factor: the DEM box (the
       // specimen's region) scales with it; the brick is cut to fit.
@@ -575,6 +575,10 @@ CLI::App* add_slope_subcommand(CLI::App& app) {
                   "one model, g raised from START by STEP up to MAX, each level held until "
                   "equilibrium or a slide (the centrifuge test's own loading)")
       ->expected(3);
+  cmd->add_option("--set", o->set,
+                  "override a scenario key, KEY=VALUE in TOML syntax (repeatable), e.g. --set "
+                  "'trial.after_cut = { rolling_friction = 0 }'; the resolved scenario.toml "
+                  "records the result");
   cmd->add_option("--scale", o->scale,
                   "run the slope at this size reduction factor s instead of slope's (smaller: "
                   "fewer particles, faster; the specimen's region follows)");

@@ -27,6 +27,7 @@ struct SlopeCommandOptions {
   std::vector<double> g_levels;    // --g: independent trials at these levels
   std::vector<double> search;      // --search STABLE FAILED
   std::vector<double> schedule;    // --schedule START STEP MAX: one model, g raised in steps
+  std::vector<std::string> set;    // --set KEY=VALUE: overrides of the scenario's keys
   double tolerance_g = 0;          // --tolerance (0: the scenario's)
   double scale = 0;                // --scale: size reduction factor s instead of the scenario's
   int jobs = 0;                    // 0: campaign.jobs

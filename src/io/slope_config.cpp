@@ -458,7 +458,8 @@ SlopeScenario parse_slope_scenario(std::string_view text, const std::string& sou
   return sc;
 }
 
-SlopeScenario load_slope_scenario(const std::string& path) {
+SlopeScenario load_slope_scenario(const std::string& path,
+                                  const std::vector<std::string>& overrides) {
   std::ifstream in(path, std::ios::binary);
   if (!in || std::filesystem::is_directory(path))
     throw InputError("scenario file", "\"" + path + "\"", "cannot be opened for reading");
@@ -466,7 +467,8 @@ SlopeScenario load_slope_scenario(const std::string& path) {
   buffer << in.rdbuf();
   std::filesystem::path base = std::filesystem::path(path).parent_path();
   if (base.empty()) base = ".";
-  return parse_slope_scenario(buffer.str(), path, base.string());
+  return parse_slope_scenario(tomlread::apply_overrides(buffer.str(), path, overrides),
+                              overrides.empty() ? path : path + " (with --set)", base.string());
 }
 
 std::string resolved_slope_toml(const SlopeScenario& sc) {

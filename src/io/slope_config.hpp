@@ -135,7 +135,9 @@ struct SlopeScenario {
 
 SlopeScenario parse_slope_scenario(std::string_view toml_text, const std::string& source_name,
                                    const std::string& base_dir);
-SlopeScenario load_slope_scenario(const std::string& path);
+// `overrides`: `KEY = VALUE` lines merged over the file (tomlread::apply_overrides).
+SlopeScenario load_slope_scenario(const std::string& path,
+                                  const std::vector<std::string>& overrides = {});
 
 // The resolved scenario as TOML (every default explicit); parsing it back
 // gives the same scenario.

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <fmt/format.h>
+#include <sstream>
 
 namespace centridem::tomlread {
 
@@ -179,6 +180,52 @@ std::string contact_inline(const ContactProperties& c) {
                    num(c.attraction_range_m), num(c.dashpot_normal_ratio),
                    num(c.dashpot_shear_ratio), c.dashpot_mode, c.limits_use_net_force);
   return o;
+}
+
+namespace {
+void merge_into(toml::table& into, const toml::table& from) {
+  for (const auto& [k, v] : from) {
+    toml::node* here = into.get(k.str());
+    const toml::table* sub = v.as_table();
+    // A table written with dotted keys or [headers] merges; an inline table
+    // given on the command line replaces the value, as any other value does.
+    if (here && here->is_table() && sub && !sub->is_inline())
+      merge_into(*here->as_table(), *sub);
+    else
+      into.insert_or_assign(k.str(), v);
+  }
+}
+} // namespace
+
+std::string apply_overrides(std::string_view toml_text, const std::string& source_name,
+                            const std::vector<std::string>& overrides) {
+  if (overrides.empty()) return std::string(toml_text);
+  toml::table root;
+  try {
+    root = toml::parse(toml_text, std::string_view(source_name));
+  } catch (const toml::parse_error& e) {
+    const toml::source_region& r = e.source();
+    throw InputError(fmt::format("{}:{}:{}: TOML syntax error: {}", source_name, r.begin.line,
+                                 r.begin.column, e.description()));
+  }
+  for (const std::string& o : overrides) {
+    toml::table t;
+    try {
+      t = toml::parse(std::string_view(o), std::string_view("--set"));
+    } catch (const toml::parse_error& e) {
+      throw InputError("--set", quote(o),
+                       fmt::format("KEY = VALUE in TOML syntax, e.g. trial.max_time_s = 0.2 or "
+                                   "trial.after_cut = {{ rolling_friction = 0 }} ({})",
+                                   e.description()));
+    }
+    if (t.empty())
+      throw InputError("--set", quote(o),
+                       "KEY = VALUE in TOML syntax, e.g. trial.max_time_s = 0.2");
+    merge_into(root, t);
+  }
+  std::ostringstream out;
+  out << toml::toml_formatter{root};
+  return out.str();
 }
 
 } // namespace centridem::tomlread

@@ -37,6 +37,15 @@ long as_integer(const toml::node& n, const std::string& key, const std::string& 
 const toml::table& as_table(const toml::node& n, const std::string& key, const std::string& what);
 std::string path_of(const std::string& table, std::string_view key); // "table.key" or "key"
 
+// Command-line overrides (`--set KEY=VALUE`, TOML syntax, dotted keys:
+// `trial.after_cut = { rolling_friction = 0 }`) merged into a scenario's text:
+// tables merge key by key, any other value (an inline table too) replaces the
+// one in the file. Returns the merged document as TOML text (the scenario
+// reader then checks every key as usual). Throws InputError naming `--set`
+// and the override for one that is not `KEY = VALUE`.
+std::string apply_overrides(std::string_view toml_text, const std::string& source_name,
+                            const std::vector<std::string>& overrides);
+
 // t[k] when present, checked with ok(value); the key in messages is path.k.
 template <class Ok>
 std::optional<double> opt_number(const toml::table& t, const std::string& path, std::string_view k,
