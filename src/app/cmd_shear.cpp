@@ -83,8 +83,18 @@ void run_one(const ShearScenario& sc, double sigma, int threads, const fs::path&
   ws.threads = threads;
   World world(ws);
   const DirectShearSpec spec = sc.run_spec(sigma);
-  const DirectShearCheckpoints ck{checkpoint_path(out, sigma).string(),
-                                  {sc.checkpoint_interval_min, 0}};
+  auto last_consolidation_line = Clock::now();
+  const DirectShearCheckpoints ck{
+      checkpoint_path(out, sigma).string(),
+      {sc.checkpoint_interval_min, 0},
+      [&](const ConsolidationState& c) {
+        if (seconds_since(last_consolidation_line) < progress_interval_s) return;
+        last_consolidation_line = Clock::now();
+        log(fmt::format("consolidating: step {}, sigma {:.1f} kPa (target {:g}), unbalanced-force "
+                        "ratio {:.3g} (target {:.3g})",
+                        c.steps, c.normal_stress_Pa / 1000, sigma / 1000, c.unbalanced_force_ratio,
+                        spec.consolidation_ratio));
+      }};
   if (fs::exists(ck.path)) {
     log("resuming from " + ck.path);
   } else {

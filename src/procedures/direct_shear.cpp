@@ -236,10 +236,12 @@ DirectShearResult run_direct_shear(World& w, const DirectShearSpec& s,
       if (fit_steps + into >= s.consolidation_max_steps) break;
       cyc.advance(check - into % check);
       r.consolidation_steps = fit_steps + (w.step_count() - pr.consolidation_first_step);
-      const double err = std::abs(normal_stress() - s.normal_stress_Pa) / s.normal_stress_Pa;
-      if (err < s.consolidation_stress_tolerance &&
-          w.mean_unbalanced_force_ratio() < s.consolidation_ratio)
-        break;
+      const double sigma = normal_stress();
+      const double err = std::abs(sigma - s.normal_stress_Pa) / s.normal_stress_Pa;
+      const double ratio = w.mean_unbalanced_force_ratio();
+      if (ck.consolidation_progress)
+        ck.consolidation_progress({r.consolidation_steps, sigma, ratio});
+      if (err < s.consolidation_stress_tolerance && ratio < s.consolidation_ratio) break;
       cyc.at_check();
     }
     r.consolidated_height_m = height();

@@ -76,6 +76,14 @@ struct DirectShearResult {
 
 using ShearProgress = std::function<void(const ShearPoint&, const DirectShearResult&)>;
 
+// Consolidation, at each check: steps so far, bottom-wall stress [Pa] and the
+// mean unbalanced-force ratio [-].
+struct ConsolidationState {
+  long steps = 0;
+  double normal_stress_Pa = 0;
+  double unbalanced_force_ratio = 0;
+};
+
 // Adds the 12 walls around the box; returns nothing the caller needs: walls
 // are named bottom, lower_x0, lower_x1, lower_y0, lower_y1, top, upper_x0,
 // upper_x1, upper_y0, upper_y1, plate_lower, plate_upper.
@@ -88,6 +96,7 @@ void add_shear_box(World& world, const ShearBox& box, const ContactProperties& b
 struct DirectShearCheckpoints {
   std::string path; // checkpoint file; empty = no checkpoints
   CheckpointPolicy policy;
+  std::function<void(const ConsolidationState&)> consolidation_progress; // optional
 };
 
 // Runs consolidation and shearing on `world`, which holds the specimen inside
