@@ -445,6 +445,8 @@ CLI::App* add_shear_subcommand(CLI::App& app) {
   cmd->add_option(
       "--pressure", o->pressures_kPa,
       "run only this normal pressure [kPa] (repeatable; default: shear.normal_stresses_Pa)");
+  cmd->add_option("--progress", o->progress_interval_s, "seconds between progress lines")
+      ->check(CLI::PositiveNumber);
   cmd->add_option("--threads", o->threads,
                   "OpenMP threads per run (default: shear.threads; 0 = the OpenMP default)")
       ->check(CLI::NonNegativeNumber);
