@@ -667,8 +667,11 @@ template <bool Periodic> void World::compute_contacts_impl() {
   // and its ball-wall contacts, sums its own side in registers and leaves the
   // force and moment on j in the entry; integrate() gathers those in a fixed
   // order. No two threads write the same memory, and sums do not depend on
-  // the thread count.
-#pragma omp parallel for schedule(static, 256) num_threads(thread_count(settings_, n))             \
+  // the thread count. Each thread takes one contiguous block of rows: the
+  // particles are in cell order, so most neighbours j of a row i lie in the
+  // same block and their cache lines stay with one core (chunks of 256 rows
+  // dealt in turn gave 1.6x from 1 to 2 threads; contiguous blocks 1.9x).
+#pragma omp parallel for schedule(static) num_threads(thread_count(settings_, n))                  \
     reduction(min                                                                                  \
               : unstable)
   for (std::size_t i = 0; i < n; ++i) {
@@ -764,7 +767,7 @@ void World::integrate() {
   double max_move2 = 0.0;
   std::uint32_t bad = UINT32_MAX;
 
-#pragma omp parallel for schedule(static, 256) num_threads(thread_count(settings_, n))             \
+#pragma omp parallel for schedule(static) num_threads(thread_count(settings_, n))                  \
     reduction(max                                                                                  \
               : max_move2) reduction(min                                                           \
                                      : bad)
