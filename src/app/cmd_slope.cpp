@@ -330,6 +330,14 @@ int run_slope_command(const SlopeCommandOptions& opt) {
       if (!(opt.scale > 0 && opt.scale <= 1))
         throw InputError("--scale", fmt::format("{:g}", opt.scale),
                          "a size reduction factor in (0, 1]");
+      // The same soil as the scenario's model: stresses follow n g / s and
+      // do not depend on s, and so must the cohesion (F0 / d^2 with the same
+      // grains). When the scenario divides F0 by its own s (the paper's rule),
+      // that F0 is kept, not divided by the new s.
+      if (sc.attraction_divided_by_s) {
+        sc.ball_ball.attraction_force_N /= sc.slope.size_reduction_factor;
+        sc.attraction_divided_by_s = false;
+      }
       sc.slope.size_reduction_factor = opt.scale;
       validate(sc.slope, "slope");
       if (sc.specimen.source != SpecimenSpec::Source::file)
@@ -581,7 +589,8 @@ CLI::App* add_slope_subcommand(CLI::App& app) {
                   "records the result");
   cmd->add_option("--scale", o->scale,
                   "run the slope at this size reduction factor s instead of slope's (smaller: "
-                  "fewer particles, faster; the specimen's region follows)");
+                  "fewer particles, faster; the specimen's region follows; stresses and the "
+                  "soil's F0 stay those of the scenario's model)");
   cmd->add_option("--tolerance", o->tolerance_g, "search: stop when the bracket is this narrow [g]")
       ->check(CLI::PositiveNumber);
   cmd->add_option("--jobs", o->jobs, "trials at once, as child processes (default: campaign.jobs)")
