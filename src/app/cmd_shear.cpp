@@ -12,6 +12,7 @@
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -108,8 +109,10 @@ void run_one(const ShearScenario& sc, double sigma, int threads, const fs::path&
                     sigma / 1000));
   }
 
+  // Baseline of the rate: set at the first progress call, after any resumed
+  // checkpoint has been read (the steps before it were not run by this process).
   auto last = Clock::now();
-  long last_steps = world.step_count();
+  long last_steps = -1;
   std::optional<std::pair<Clock::time_point, double>> first; // wall time, displacement
   // The curve so far, rewritten with every progress line: a long run can be
   // watched (and plotted) while it goes on.
@@ -126,6 +129,10 @@ void run_one(const ShearScenario& sc, double sigma, int threads, const fs::path&
   };
   const ShearProgress progress = [&](const ShearPoint& p, const DirectShearResult& r) {
     const auto now = Clock::now();
+    if (last_steps < 0) {
+      last = now;
+      last_steps = world.step_count();
+    }
     if (!first) {
       first = {now, p.shear_displacement_m};
       if (r.curve.size() == 1)
@@ -191,9 +198,53 @@ nlohmann::json read_json(const fs::path& path) {
   return nlohmann::json::parse(in);
 }
 
+// The curve so far of an unfinished run, from the shear_<kPa>kPa.csv that the
+// run rewrites with every progress line: strain, shear stress [Pa], vertical
+// displacement [m] per row. Empty when there is no CSV yet. A CSV whose header
+// is not the one run_one writes is an error naming the file.
+struct PartialCurve {
+  std::vector<std::array<double, 3>> strain_tau_dz;
+  double shear_displacement_m = 0;
+};
+PartialCurve read_partial_curve(const fs::path& csv) {
+  PartialCurve c;
+  std::ifstream in(csv);
+  if (!in) return c;
+  std::string line;
+  std::getline(in, line);
+  const std::string header = "step,time_s,shear_displacement_m,shear_strain,shear_stress_Pa,"
+                             "normal_stress_Pa,vertical_displacement_m,porosity";
+  if (line != header)
+    throw InputError(csv.string() + " line 1", "\"" + line + "\"", "the header \"" + header + "\"");
+  long n = 1;
+  while (std::getline(in, line)) {
+    ++n;
+    if (line.empty()) continue;
+    std::array<double, 8> v{};
+    std::size_t pos = 0, k = 0;
+    for (; k < v.size() && pos <= line.size(); ++k) {
+      const std::size_t comma = std::min(line.find(',', pos), line.size());
+      const std::string field = line.substr(pos, comma - pos);
+      char* end = nullptr;
+      v[k] = std::strtod(field.c_str(), &end);
+      if (field.empty() || end != field.c_str() + field.size() || !std::isfinite(v[k]))
+        throw InputError(fmt::format("{} line {} column {}", csv.string(), n, k + 1),
+                         "\"" + field + "\"", "a finite number");
+      pos = comma + 1;
+    }
+    if (k != v.size() || pos <= line.size())
+      throw InputError(fmt::format("{} line {}", csv.string(), n), "\"" + line + "\"",
+                       "8 comma-separated numbers");
+    c.strain_tau_dz.push_back({v[3], v[4], v[6]});
+    c.shear_displacement_m = v[2];
+  }
+  return c;
+}
+
 void write_plots(const ShearScenario& sc, const std::vector<double>& sigmas,
-                 const std::vector<nlohmann::json>& runs, const fs::path& out,
-                 const MohrCoulombFit& peak, const MohrCoulombFit& residual) {
+                 const std::vector<nlohmann::json>& runs,
+                 const std::vector<std::pair<double, PartialCurve>>& unfinished,
+                 const fs::path& out, const MohrCoulombFit& peak, const MohrCoulombFit& residual) {
   const bool by_height = sc.test.strain == StrainDefinition::height;
   const std::string strain_label =
       by_height ? "shear strain = δ / H (%)" : "shear strain = δ / L (%)";
@@ -212,10 +263,26 @@ void write_plots(const ShearScenario& sc, const std::vector<double>& sigmas,
       v.push_back(p[2].get<double>() * 1000);
     }
     const std::string name = "σn = " + kpa_label(sigmas[k]) + " kPa";
-    tau.add(name, x, y);
-    dz.add(name, x, v);
+    tau.add(name, x, y).with_colour(palette_colour(k));
+    dz.add(name, x, v).with_colour(palette_colour(k));
+  }
+  for (std::size_t k = 0; k < unfinished.size(); ++k) {
+    const auto& [sigma, c] = unfinished[k];
+    if (c.strain_tau_dz.empty()) continue;
+    std::vector<double> x, y, v;
+    for (const auto& p : c.strain_tau_dz) {
+      x.push_back(100 * p[0]);
+      y.push_back(p[1] / 1000);
+      v.push_back(p[2] * 1000);
+    }
+    const std::string name = fmt::format("σn = {} kPa (unfinished, δ = {:.2f} mm)",
+                                         kpa_label(sigma), c.shear_displacement_m * 1000);
+    const std::size_t colour = runs.size() + k;
+    tau.add(name, x, y).dashed_line().with_colour(palette_colour(colour));
+    dz.add(name, x, v).dashed_line().with_colour(palette_colour(colour));
   }
   render_panels((out / "shear_curves.png").string(), {tau, dz}, 2);
+  if (runs.empty()) return; // no peak yet to put on the Mohr-Coulomb plane
 
   LinePlot mc;
   mc.title = "Mohr-Coulomb envelopes";
@@ -259,26 +326,30 @@ int run_shear_command(const ShearCommandOptions& o) {
   ShearScenario sc;
   std::vector<double> sigmas;
   fs::path out;
-  if (!o.resume_dir.empty()) {
-    out = o.resume_dir;
+  const bool report_only = !o.report_dir.empty();
+  if (report_only && !o.resume_dir.empty())
+    throw InputError("--report", o.report_dir, "either --report or --resume, not both");
+  if (!o.resume_dir.empty() || report_only) {
+    const std::string flag = report_only ? "--report" : "--resume";
+    out = report_only ? o.report_dir : o.resume_dir;
     if (!o.scenario.empty() || !o.out_dir.empty() || !o.pressures_kPa.empty())
-      throw InputError("--resume", o.resume_dir,
-                       "continues a run folder as it was started: give no scenario, --out or "
+      throw InputError(flag, out.string(),
+                       "works on a run folder as it was started: give no scenario, --out or "
                        "--pressure with it");
     if (!fs::exists(out / "scenario.toml") || !fs::exists(out / "pressures.json"))
-      throw InputError("--resume", o.resume_dir,
+      throw InputError(flag, out.string(),
                        "not a shear run folder (scenario.toml and pressures.json missing)");
     sc = load_shear_scenario((out / "scenario.toml").string());
     try {
       sigmas =
           read_json(out / "pressures.json").at("normal_stresses_Pa").get<std::vector<double>>();
     } catch (const nlohmann::json::exception& e) {
-      throw InputError("--resume", (out / "pressures.json").string(),
+      throw InputError(flag, (out / "pressures.json").string(),
                        std::string("a pressures.json written by centridem shear (") + e.what() +
                            ")");
     }
     for (double s : sigmas) validate(sc.run_spec(s));
-    fmt::print(stderr, "centridem shear: resuming {}\n", out.string());
+    if (!report_only) fmt::print(stderr, "centridem shear: resuming {}\n", out.string());
   } else {
     if (o.scenario.empty())
       throw InputError("scenario", "(missing)", "a scenario file, or --resume RUN_DIR");
@@ -314,39 +385,50 @@ int run_shear_command(const ShearCommandOptions& o) {
   }
   const int threads = o.threads >= 0 ? o.threads : sc.threads;
   const int jobs = std::min<int>(o.jobs, static_cast<int>(sigmas.size()));
-  fmt::print(
-      stderr,
-      "centridem shear: {} pressure(s) [{}] kPa, {} job(s), {} thread(s) per run, "
-      "output {}\n",
-      sigmas.size(),
-      [&] {
-        std::string l;
-        for (double s : sigmas) l += (l.empty() ? "" : ", ") + kpa_label(s);
-        return l;
-      }(),
-      jobs, threads == 0 ? std::string("default") : std::to_string(threads), out.string());
+  if (!report_only)
+    fmt::print(
+        stderr,
+        "centridem shear: {} pressure(s) [{}] kPa, {} job(s), {} thread(s) per run, "
+        "output {}\n",
+        sigmas.size(),
+        [&] {
+          std::string l;
+          for (double s : sigmas) l += (l.empty() ? "" : ", ") + kpa_label(s);
+          return l;
+        }(),
+        jobs, threads == 0 ? std::string("default") : std::to_string(threads), out.string());
   std::fflush(stderr);
 
   int failed_rc = 0;
-  const std::vector<int> codes = run_jobs(
-      sigmas.size(), jobs,
-      [&](std::size_t k) { run_one(sc, sigmas[k], threads, out, k == 0, o.progress_interval_s); },
-      [&](std::size_t k) { return "the " + kpa_label(sigmas[k]) + " kPa run"; });
-  for (int code : codes)
-    if (code > 0 && failed_rc == 0) failed_rc = code;
+  if (!report_only) {
+    const std::vector<int> codes = run_jobs(
+        sigmas.size(), jobs,
+        [&](std::size_t k) { run_one(sc, sigmas[k], threads, out, k == 0, o.progress_interval_s); },
+        [&](std::size_t k) { return "the " + kpa_label(sigmas[k]) + " kPa run"; });
+    for (int code : codes)
+      if (code > 0 && failed_rc == 0) failed_rc = code;
+  }
   if (stop_signal() && failed_rc == 0) failed_rc = 128 + stop_signal();
   const bool interrupted = failed_rc > 128;
 
   // Collect.
   std::vector<double> done_sigmas;
   std::vector<nlohmann::json> runs;
+  std::vector<std::pair<double, PartialCurve>> unfinished; // curves so far, plotted dashed
   for (double s : sigmas) {
     const fs::path p = out / (run_stem(s) + ".json");
-    if (!fs::exists(p)) continue;
+    if (!fs::exists(p)) {
+      unfinished.emplace_back(s, read_partial_curve(out / (run_stem(s) + ".csv")));
+      continue;
+    }
     done_sigmas.push_back(s);
     runs.push_back(read_json(p));
   }
-  if (runs.empty()) {
+  const bool any_curve = std::any_of(unfinished.begin(), unfinished.end(),
+                                     [](const auto& u) { return !u.second.strain_tau_dz.empty(); });
+  if (runs.empty() && !(report_only && any_curve)) {
+    if (report_only)
+      throw InputError("--report", out.string(), "holds no finished run and no curve yet");
     if (interrupted) {
       fmt::print(stderr,
                  "centridem shear: interrupted; continue with `centridem shear --resume {}`\n",
@@ -363,10 +445,10 @@ int run_shear_command(const ShearCommandOptions& o) {
   }
   const MohrCoulombFit peak = fit_mohr_coulomb(done_sigmas, tp);
   const MohrCoulombFit residual = fit_mohr_coulomb(done_sigmas, tr);
-  write_plots(sc, done_sigmas, runs, out, peak, residual);
+  write_plots(sc, done_sigmas, runs, unfinished, out, peak, residual);
 
   nlohmann::json summary;
-  summary["scenario"] = o.scenario;
+  summary["scenario"] = report_only ? (out / "scenario.toml").string() : o.scenario;
   summary["box_m"] = {sc.test.box.length_m, sc.test.box.width_m, sc.test.box.height_m};
   summary["strain"] = sc.test.strain == StrainDefinition::height ? "height" : "length";
   summary["shear_rate_m_per_s"] = sc.test.shear_rate_m_per_s;
@@ -391,14 +473,19 @@ int run_shear_command(const ShearCommandOptions& o) {
   summary["mohr_coulomb"] = {{"peak", fit_json(peak)}, {"residual", fit_json(residual)}};
   summary["unfinished_Pa"] = [&] {
     std::vector<double> u;
-    for (double s : sigmas)
-      if (std::find(done_sigmas.begin(), done_sigmas.end(), s) == done_sigmas.end()) u.push_back(s);
+    for (const auto& [s, c] : unfinished) u.push_back(s);
+    return u;
+  }();
+  summary["unfinished_shear_displacement_m"] = [&] {
+    std::vector<double> u;
+    for (const auto& [s, c] : unfinished) u.push_back(c.shear_displacement_m);
     return u;
   }();
   write_text(out / "summary.json", summary.dump(2) + "\n");
 
-  fmt::print("{:>8} {:>10} {:>9} {:>10} {:>10} {:>9} {:>8} {:>5}\n", "sigma", "peak", "phi_peak",
-             "strain_pk", "residual", "phi_res", "sig_dev", "lost");
+  if (!runs.empty())
+    fmt::print("{:>8} {:>10} {:>9} {:>10} {:>10} {:>9} {:>8} {:>5}\n", "sigma", "peak", "phi_peak",
+               "strain_pk", "residual", "phi_res", "sig_dev", "lost");
   for (const auto& r : runs)
     fmt::print(
         "{:>5g} kPa {:>6.1f} kPa {:>7.1f}° {:>10.3f} {:>6.1f} kPa {:>7.1f}° {:>7.1f}% {:>5}\n",
@@ -412,9 +499,16 @@ int run_shear_command(const ShearCommandOptions& o) {
                "{:.2f} kPa, phi = {:.2f} deg (R^2 {:.3f})\n",
                peak.cohesion_Pa / 1000, peak.friction_angle_deg, peak.r_squared,
                residual.cohesion_Pa / 1000, residual.friction_angle_deg, residual.r_squared);
-  fmt::print("wrote {}/summary.json, shear_curves.png, mohr_coulomb.png, shear_<kPa>kPa.csv, "
+  for (const auto& [s, c] : unfinished)
+    if (c.strain_tau_dz.empty())
+      fmt::print("{:>5g} kPa not sheared yet\n", s / 1000);
+    else
+      fmt::print("{:>5g} kPa unfinished: {:.3f} of {:.3f} mm sheared so far\n", s / 1000,
+                 c.shear_displacement_m * 1000, sc.test.max_shear_displacement_m * 1000);
+  fmt::print("wrote {}/summary.json, shear_curves.png{}, shear_<kPa>kPa.csv, "
              "scenario.toml ({})\n",
-             out.string(), format_duration(seconds_since(t0)));
+             out.string(), runs.empty() ? "" : ", mohr_coulomb.png",
+             format_duration(seconds_since(t0)));
   std::fflush(stdout);
   if (interrupted) {
     fmt::print(stderr,
@@ -440,6 +534,9 @@ CLI::App* add_shear_subcommand(CLI::App& app) {
   cmd->add_option("--out", o->out_dir, "output folder (default: runs/<scenario stem>_shear)");
   cmd->add_option("--resume", o->resume_dir,
                   "continue the runs in this folder from their last checkpoints");
+  cmd->add_option("--report", o->report_dir,
+                  "run nothing: rewrite the summary and plots of this run folder from what it "
+                  "holds now (unfinished runs' curves so far drawn dashed, not in the fits)");
   cmd->add_option("--jobs", o->jobs, "pressures run at once, as child processes (default 1)")
       ->check(CLI::PositiveNumber);
   cmd->add_option(

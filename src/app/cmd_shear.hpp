@@ -1,5 +1,6 @@
 // `centridem shear SCENARIO.toml [--out DIR] [--jobs N] [--pressure KPA]...`
-// and `centridem shear --resume DIR [--jobs N]`: the numerical direct shear
+// `centridem shear --resume DIR [--jobs N]` and `centridem shear --report DIR`
+// (summary and plots of what DIR holds now, runs still going included): the numerical direct shear
 // test (Tao et al. section 3.1; docs/shear.md).
 // One run per normal pressure, each on the same specimen (same seed) built
 // into a fresh World; with --jobs N > 1 the runs are forked child processes
@@ -25,6 +26,7 @@ struct ShearCommandOptions {
   std::string scenario;
   std::string out_dir;               // "" = runs/<scenario stem>_shear
   std::string resume_dir;            // continue the runs in this folder
+  std::string report_dir;            // only rewrite this folder's summary and plots
   int jobs = 1;                      // parallel runs (child processes)
   std::vector<double> pressures_kPa; // empty: the scenario's list
   int threads = -1;                  // per run; < 0: the scenario's shear.threads

@@ -1,0 +1,128 @@
+// `centridem shear --report DIR`: the summary and plots of a run folder as it
+// is now, with a finished pressure (in the fits) and an unfinished one (its
+// curve so far, read from the CSV the running test rewrites; not in the
+// fits), and a clear exit-2 error naming the line of a damaged CSV.
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+#include <sys/wait.h>
+#include <vector>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+int run(const std::string& cmd) {
+  const int st = std::system(cmd.c_str());
+  return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+}
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+std::vector<std::string> lines_of(const fs::path& p) {
+  std::ifstream in(p);
+  std::vector<std::string> v;
+  for (std::string l; std::getline(in, l);) v.push_back(l);
+  return v;
+}
+
+// A reduced test (the CI box of examples/shear_small.toml, ~1,000 particles),
+// one pressure, sheared 0.15 mm: a few seconds.
+const char* kScenario = R"(
+description = "report test"
+[specimen]
+gradation = { bins = [{ d_min_m = 0.4e-3, d_max_m = 0.6e-3, volume_fraction = 1.0 }] }
+porosity = 0.40
+density_kg_m3 = 2633.0
+seed = 11
+brick = { size_m = [3e-3, 3e-3, 3e-3] }
+region = { lo_m = [0.0, 0.0, 0.0], hi_m = [6e-3, 6e-3, 3e-3] }
+[specimen.relax]
+contact = "scenario"
+[contact.ball_ball]
+model = "rrlinear"
+effective_modulus_Pa = 300e6
+stiffness_ratio = 1.5
+friction = 0.5
+rolling_friction = 0.16
+[shear]
+box = { length_m = 6e-3, width_m = 6e-3, height_m = 3e-3 }
+normal_stresses_Pa = [100e3]
+shear_rate_m_per_s = 0.02
+max_shear_displacement_m = 0.15e-3
+ball_wall = { model = "linear", effective_modulus_Pa = 1e9, stiffness_ratio = 1.5, friction = 0.0 }
+record_interval_steps = 500
+local_damping = 0.7
+threads = 1
+)";
+
+} // namespace
+
+TEST(ShearReport, FinishedAndUnfinishedRunsAreReportedAndABadCsvLineIsNamed) {
+  const fs::path dir = fs::temp_directory_path() / "centridem_shear_report_test";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  { std::ofstream(dir / "scenario_in.toml") << kScenario; }
+  const fs::path out = dir / "run";
+  const std::string bin = CENTRIDEM_BINARY;
+  ASSERT_EQ(run(bin + " shear " + (dir / "scenario_in.toml").string() + " --out " + out.string() +
+                " > " + (dir / "run.log").string() + " 2>&1"),
+            0)
+      << slurp(dir / "run.log");
+  ASSERT_TRUE(fs::exists(out / "shear_100kPa.json"));
+
+  // A second pressure still running: the first half of a curve, no result yet.
+  const std::vector<std::string> rows = lines_of(out / "shear_100kPa.csv");
+  ASSERT_GT(rows.size(), 6u);
+  const std::size_t keep = rows.size() / 2;
+  {
+    std::ofstream csv(out / "shear_150kPa.csv");
+    for (std::size_t k = 0; k < keep; ++k) csv << rows[k] << "\n";
+    std::ofstream(out / "pressures.json") << R"({"normal_stresses_Pa": [100000.0, 150000.0]})";
+  }
+  const double last_displacement = [&] {
+    std::stringstream r(rows[keep - 1]);
+    std::string f;
+    for (int k = 0; k < 3; ++k) std::getline(r, f, ',');
+    return std::stod(f);
+  }();
+  fs::remove(out / "summary.json");
+  fs::remove(out / "shear_curves.png");
+
+  ASSERT_EQ(run(bin + " shear --report " + out.string() + " > " + (dir / "report.log").string() +
+                " 2>&1"),
+            0)
+      << slurp(dir / "report.log");
+  std::ifstream in(out / "summary.json");
+  const nlohmann::json s = nlohmann::json::parse(in);
+  ASSERT_EQ(s["runs"].size(), 1u); // only the finished pressure is in the results and fits
+  EXPECT_DOUBLE_EQ(s["runs"][0]["normal_stress_target_Pa"].get<double>(), 100e3);
+  ASSERT_EQ(s["unfinished_Pa"].size(), 1u);
+  EXPECT_DOUBLE_EQ(s["unfinished_Pa"][0].get<double>(), 150e3);
+  EXPECT_NEAR(s["unfinished_shear_displacement_m"][0].get<double>(), last_displacement,
+              1e-9 * last_displacement);
+  EXPECT_TRUE(fs::exists(out / "shear_curves.png"));
+  EXPECT_NE(slurp(dir / "report.log").find("150 kPa unfinished"), std::string::npos);
+
+  // A damaged number on the CSV's third line: exit 2, the file and line named.
+  {
+    std::ofstream csv(out / "shear_150kPa.csv");
+    for (std::size_t k = 0; k < keep; ++k) csv << (k == 2 ? "1,2,abc,4,5,6,7,8" : rows[k]) << "\n";
+  }
+  EXPECT_EQ(
+      run(bin + " shear --report " + out.string() + " > " + (dir / "bad.log").string() + " 2>&1"),
+      2);
+  const std::string bad = slurp(dir / "bad.log");
+  EXPECT_NE(bad.find("shear_150kPa.csv line 3 column 3"), std::string::npos) << bad;
+  EXPECT_NE(bad.find("abc"), std::string::npos) << bad;
+  fs::remove_all(dir);
+}
