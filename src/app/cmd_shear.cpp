@@ -5,6 +5,7 @@
 #include "core/errors.hpp"
 #include "core/interrupt.hpp"
 #include "core/world.hpp"
+#include "io/csv.hpp"
 #include "io/plot.hpp"
 #include "io/shear_config.hpp"
 #include "procedures/direct_shear.hpp"
@@ -219,22 +220,14 @@ PartialCurve read_partial_curve(const fs::path& csv) {
   long n = 1;
   while (std::getline(in, line)) {
     ++n;
-    if (line.empty()) continue;
-    std::array<double, 8> v{};
-    std::size_t pos = 0, k = 0;
-    for (; k < v.size() && pos <= line.size(); ++k) {
-      const std::size_t comma = std::min(line.find(',', pos), line.size());
-      const std::string field = line.substr(pos, comma - pos);
-      char* end = nullptr;
-      v[k] = std::strtod(field.c_str(), &end);
-      if (field.empty() || end != field.c_str() + field.size() || !std::isfinite(v[k]))
-        throw InputError(fmt::format("{} line {} column {}", csv.string(), n, k + 1),
-                         "\"" + field + "\"", "a finite number");
-      pos = comma + 1;
-    }
-    if (k != v.size() || pos <= line.size())
+    if (trim_blanks(line).empty()) continue;
+    const std::vector<std::string_view> f = split_commas(line);
+    if (f.size() != 8)
       throw InputError(fmt::format("{} line {}", csv.string(), n), "\"" + line + "\"",
-                       "8 comma-separated numbers");
+                       fmt::format("8 comma-separated numbers, found {}", f.size()));
+    std::array<double, 8> v{};
+    for (std::size_t k = 0; k < v.size(); ++k)
+      v[k] = parse_finite_number(f[k], fmt::format("{} line {} column {}", csv.string(), n, k + 1));
     c.strain_tau_dz.push_back({v[3], v[4], v[6]});
     c.shear_displacement_m = v[2];
   }

@@ -2,6 +2,7 @@
 #include "io/toml_read.hpp"
 
 #include "core/errors.hpp"
+#include "io/csv.hpp"
 #include "io/scenario.hpp" // did_you_mean (read-only use)
 
 #include <algorithm>
@@ -20,29 +21,6 @@ namespace fs = std::filesystem;
 
 // ---------------------------------------------------------------- sieve CSV --
 
-namespace {
-
-std::string_view trim(std::string_view s) {
-  while (!s.empty() && (s.front() == ' ' || s.front() == '\t' || s.front() == '\r'))
-    s.remove_prefix(1);
-  while (!s.empty() && (s.back() == ' ' || s.back() == '\t' || s.back() == '\r'))
-    s.remove_suffix(1);
-  return s;
-}
-
-std::vector<std::string_view> split_commas(std::string_view line) {
-  std::vector<std::string_view> out;
-  for (;;) {
-    const std::size_t c = line.find(',');
-    out.push_back(trim(line.substr(0, c)));
-    if (c == std::string_view::npos) break;
-    line.remove_prefix(c + 1);
-  }
-  return out;
-}
-
-} // namespace
-
 SieveTable parse_sieve_csv(std::string_view text, const std::string& source) {
   SieveTable t;
   t.source = source;
@@ -55,7 +33,7 @@ SieveTable parse_sieve_csv(std::string_view text, const std::string& source) {
     const std::string_view raw = text.substr(0, nl);
     text.remove_prefix(nl == std::string_view::npos ? text.size() : nl + 1);
     ++lineno;
-    const std::string_view line = trim(raw);
+    const std::string_view line = trim_blanks(raw);
     if (line.empty() || line.front() == '#') continue;
     const std::vector<std::string_view> cols = split_commas(line);
     if (!header) {
@@ -87,11 +65,7 @@ SieveTable parse_sieve_csv(std::string_view text, const std::string& source) {
     for (int k = 0; k < 2; ++k) {
       const int c = k == 0 ? size_col : pass_col;
       const std::string_view s = cols[static_cast<std::size_t>(c)];
-      double x = 0;
-      const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), x);
-      if (s.empty() || ec != std::errc() || end != s.data() + s.size() || !std::isfinite(x))
-        throw InputError(fmt::format("{} column {}", at(lineno), names[k]),
-                         "\"" + std::string(s) + "\"", "expected a finite number");
+      const double x = parse_finite_number(s, fmt::format("{} column {}", at(lineno), names[k]));
       if (x < 0)
         throw InputError(fmt::format("{} column {}", at(lineno), names[k]), fmt::format("{:g}", x),
                          "must be >= 0");
