@@ -20,12 +20,19 @@ enum class WallShape : std::uint8_t { plane, rectangle };
 // in one step it would close the force error by the fraction alpha given the
 // current contact stiffness, capped at max_speed. Velocity components across
 // `direction` are left as prescribed.
+// Optional integral term (not in PFC): with integral_time_s = Ti > 0 the force
+// error closed is (error + integral(error dt) / Ti). A proportional servo that
+// must follow a specimen which keeps contracting (or dilating) at a speed v
+// lags by v (sum kn) dt / alpha; the integral removes that steady error. The
+// integral is held while the speed is at its cap (no wind-up).
 struct WallServo {
   bool active = false;
-  Vec3 direction{0, 0, 1};        // unit: the way the wall moves to compress the specimen
-  double target_force_N = 0.0;    // compressive force wanted on the wall [N]
-  double gain_factor = 0.5;       // alpha, in (0, 1] [-]
-  double max_speed_m_per_s = 1.0; // speed cap [m/s]
+  Vec3 direction{0, 0, 1};         // unit: the way the wall moves to compress the specimen
+  double target_force_N = 0.0;     // compressive force wanted on the wall [N]
+  double gain_factor = 0.5;        // alpha, in (0, 1] [-]
+  double max_speed_m_per_s = 1.0;  // speed cap [m/s]
+  double integral_time_s = 0.0;    // Ti [s]; 0: proportional only (PFC's form)
+  double error_integral_N_s = 0.0; // state: integral of the force error over time [N s]
 };
 
 struct Wall {

@@ -181,6 +181,9 @@ void World::set_wall_servo(std::size_t wall, const WallServo& servo) {
     if (!(s.max_speed_m_per_s > 0) || !std::isfinite(s.max_speed_m_per_s))
       throw InputError(key + ".max_speed_m_per_s", fmt::format("{:g}", s.max_speed_m_per_s),
                        "must be > 0 [m/s]");
+    if (!(s.integral_time_s >= 0) || !std::isfinite(s.integral_time_s))
+      throw InputError(key + ".integral_time_s", fmt::format("{:g}", s.integral_time_s),
+                       "must be >= 0 [s] (0: proportional only)");
     if (!std::isfinite(s.target_force_N))
       throw InputError(key + ".target_force_N", fmt::format("{:g}", s.target_force_N),
                        "must be finite [N]");
@@ -831,13 +834,18 @@ void World::integrate() {
   if (any_servo) {
     for (Wall& wl : walls_) {
       if (!wl.servo.active) continue;
-      const WallServo& sv = wl.servo;
+      WallServo& sv = wl.servo;
       const double measured = -dot(wl.force, sv.direction); // balls push against `direction`
       const double error = sv.target_force_N - measured;
-      double speed = wl.normal_stiffness_N_per_m > 0
-                         ? sv.gain_factor * error / (wl.normal_stiffness_N_per_m * dt)
-                         : (error > 0 ? sv.max_speed_m_per_s : -sv.max_speed_m_per_s);
-      speed = std::clamp(speed, -sv.max_speed_m_per_s, sv.max_speed_m_per_s);
+      const double demand = sv.integral_time_s > 0
+                                ? error + sv.error_integral_N_s / sv.integral_time_s
+                                : error; // [N]
+      const double free_speed = wl.normal_stiffness_N_per_m > 0
+                                    ? sv.gain_factor * demand / (wl.normal_stiffness_N_per_m * dt)
+                                    : (demand > 0 ? sv.max_speed_m_per_s : -sv.max_speed_m_per_s);
+      const double speed = std::clamp(free_speed, -sv.max_speed_m_per_s, sv.max_speed_m_per_s);
+      if (sv.integral_time_s > 0 && (speed == free_speed || error * free_speed < 0))
+        sv.error_integral_N_s += error * dt;
       wl.velocity =
           wl.velocity - dot(wl.velocity, sv.direction) * sv.direction + speed * sv.direction;
     }

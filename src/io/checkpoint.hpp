@@ -19,7 +19,7 @@ namespace centridem {
 
 class World;
 
-inline constexpr unsigned kCheckpointVersion = 3; // 3: with the neighbour-list state
+inline constexpr unsigned kCheckpointVersion = 4; // 3: the neighbour-list state; 4: servo integral
 
 // FNV-1a, 64 bit: the checkpoint checksum (detects flipped bytes; with the
 // stored length, truncation); also a cache key for recipes.

@@ -43,6 +43,7 @@ const Keys kShearKeys = {"box",
                          "during_shear",
                          "servo_gain_factor",
                          "servo_max_speed_m_per_s",
+                         "servo_integral_time_s",
                          "consolidation_ratio",
                          "consolidation_stress_tolerance",
                          "consolidation_max_steps",
@@ -225,6 +226,10 @@ ShearScenario parse_shear_scenario(std::string_view text, const std::string& sou
   if (auto v = opt_number(t, P, "servo_max_speed_m_per_s", positive,
                           "the servo's speed limit: > 0 [m/s]"))
     s.servo_max_speed_m_per_s = *v;
+  if (auto v = opt_number(
+          t, P, "servo_integral_time_s", [](double x) { return x >= 0; },
+          "the servo's integral time: >= 0 [s] (0: proportional only, PFC's form)"))
+    s.servo_integral_time_s = *v;
   if (auto v = opt_number(t, P, "consolidation_ratio", positive,
                           "mean unbalanced-force ratio that ends consolidation: > 0 [-]"))
     s.consolidation_ratio = *v;
@@ -290,8 +295,10 @@ std::string resolved_shear_toml(const ShearScenario& sc) {
   o += fmt::format("strain = \"{}\"\n", s.strain == StrainDefinition::height ? "height" : "length");
   o += "ball_wall = " + contact_inline(s.ball_wall) + "\n";
   o += "during_shear = " + inline_patch(sc.during_shear) + "\n";
-  o += fmt::format("servo_gain_factor = {}\nservo_max_speed_m_per_s = {}\n",
-                   num(s.servo_gain_factor), num(s.servo_max_speed_m_per_s));
+  o += fmt::format("servo_gain_factor = {}\nservo_max_speed_m_per_s = {}\n"
+                   "servo_integral_time_s = {}\n",
+                   num(s.servo_gain_factor), num(s.servo_max_speed_m_per_s),
+                   num(s.servo_integral_time_s));
   o += fmt::format("consolidation_ratio = {}\nconsolidation_stress_tolerance = {}\n",
                    num(s.consolidation_ratio), num(s.consolidation_stress_tolerance));
   o += fmt::format("consolidation_max_steps = {}\nrecord_interval_steps = {}\n",

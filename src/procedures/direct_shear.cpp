@@ -47,6 +47,8 @@ void validate(const DirectShearSpec& s) {
             s.box.plate_length_m, "must be at least shear.max_shear_displacement_m [m]");
   require(s.servo_gain_factor > 0 && s.servo_gain_factor <= 1, "shear.servo_gain_factor",
           s.servo_gain_factor, "must be in (0, 1]");
+  require(s.servo_integral_time_s >= 0, "shear.servo_integral_time_s", s.servo_integral_time_s,
+          "must be >= 0 [s] (0: proportional only)");
   require(s.servo_max_speed_m_per_s > 0, "shear.servo_max_speed_m_per_s", s.servo_max_speed_m_per_s,
           "must be > 0 [m/s]");
   require(s.consolidation_ratio > 0, "shear.consolidation_ratio", s.consolidation_ratio,
@@ -213,6 +215,7 @@ DirectShearResult run_direct_shear(World& w, const DirectShearSpec& s,
     servo.target_force_N = s.normal_stress_Pa * area;
     servo.gain_factor = s.servo_gain_factor;
     servo.max_speed_m_per_s = s.servo_max_speed_m_per_s;
+    servo.integral_time_s = s.servo_integral_time_s;
     w.set_wall_servo(bottom, servo);
     r.target_normal_stress_Pa = s.normal_stress_Pa;
     // Fit the specimen into the box: centres inside the box leave spheres

@@ -41,6 +41,7 @@ struct DirectShearSpec {
       ball_ball_during_shear;            // defaults for contacts made while shearing
   double servo_gain_factor = 0.5;        // alpha of the bottom-wall servo [-]
   double servo_max_speed_m_per_s = 0.05; // [m/s]
+  double servo_integral_time_s = 0.0;    // Ti of the servo's integral term; 0: off [s]
   double consolidation_ratio = 1e-3;     // mean unbalanced-force ratio to end consolidation [-]
   double consolidation_stress_tolerance = 0.01; // and |sigma - target| / target below this [-]
   long consolidation_max_steps = 400'000;

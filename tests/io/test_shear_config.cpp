@@ -92,6 +92,7 @@ ball_wall = { friction = 0.2 }
 during_shear = { attraction_force_N = 0 }
 servo_gain_factor = 0.3
 servo_max_speed_m_per_s = 0.01
+servo_integral_time_s = 3e-4
 consolidation_ratio = 2e-3
 consolidation_stress_tolerance = 0.02
 consolidation_max_steps = 1000
@@ -111,6 +112,7 @@ threads = 2
   EXPECT_DOUBLE_EQ(s.test.ball_wall.effective_modulus_Pa, 1e9); // the rest from the default
   EXPECT_DOUBLE_EQ(s.test.servo_gain_factor, 0.3);
   EXPECT_DOUBLE_EQ(s.test.servo_max_speed_m_per_s, 0.01);
+  EXPECT_DOUBLE_EQ(s.test.servo_integral_time_s, 3e-4);
   EXPECT_DOUBLE_EQ(s.test.consolidation_ratio, 2e-3);
   EXPECT_DOUBLE_EQ(s.test.consolidation_stress_tolerance, 0.02);
   EXPECT_EQ(s.test.consolidation_max_steps, 1000);
@@ -194,6 +196,8 @@ TEST(ShearConfig, WrongTypesAndRangesAreRejected) {
   EXPECT_ERROR(scenario("normal_stresses_Pa = [40e3]\nstrain = \"width\"\n"), "shear.strain");
   EXPECT_ERROR(scenario("normal_stresses_Pa = [40e3]\nservo_gain_factor = 1.5\n"),
                "shear.servo_gain_factor");
+  EXPECT_ERROR(scenario("normal_stresses_Pa = [40e3]\nservo_integral_time_s = -1e-4\n"),
+               "shear.servo_integral_time_s");
   EXPECT_ERROR(scenario("normal_stresses_Pa = [40e3]\nservo_max_speed_m_per_s = -1\n"),
                "shear.servo_max_speed_m_per_s");
   EXPECT_ERROR(scenario("normal_stresses_Pa = [40e3]\nconsolidation_ratio = 0\n"),
