@@ -137,8 +137,10 @@ void run_one(const ShearScenario& sc, double sigma, int threads, const fs::path&
     if (!first) {
       first = {now, p.shear_displacement_m};
       if (r.curve.size() == 1)
-        log(fmt::format("consolidated in {} steps (sigma {:.1f} kPa); shearing",
-                        r.consolidation_steps, r.consolidated_normal_stress_Pa / 1000));
+        log(fmt::format("consolidated in {} steps (sigma {:.1f} kPa, height {:.3f} mm, porosity "
+                        "{:.3f}); shearing",
+                        r.consolidation_steps, r.consolidated_normal_stress_Pa / 1000,
+                        r.consolidated_height_m * 1e3, r.consolidated_porosity));
     }
     const double dt = std::chrono::duration<double>(now - last).count();
     if (dt < progress_interval_s) return;
@@ -168,6 +170,7 @@ void run_one(const ShearScenario& sc, double sigma, int threads, const fs::path&
                       {"consolidation_steps", r.consolidation_steps},
                       {"consolidated_height_m", r.consolidated_height_m},
                       {"consolidated_normal_stress_Pa", r.consolidated_normal_stress_Pa},
+                      {"consolidated_porosity", r.consolidated_porosity},
                       {"shear_steps", r.curve.empty() ? 0L
                                                       : r.curve.back().step - r.curve.front().step +
                                                             spec.record_interval_steps},

@@ -41,6 +41,7 @@ const Keys kShearKeys = {"box",
                          "strain",
                          "ball_wall",
                          "during_shear",
+                         "during_consolidation",
                          "servo_gain_factor",
                          "servo_max_speed_m_per_s",
                          "servo_integral_time_s",
@@ -82,6 +83,11 @@ DirectShearSpec ShearScenario::run_spec(double normal_stress_Pa) const {
     s.ball_ball_during_shear = apply(during_shear, ball_ball);
   else
     s.ball_ball_during_shear.reset();
+  s.ball_ball = ball_ball;
+  if (!during_consolidation.empty())
+    s.ball_ball_during_consolidation = apply(during_consolidation, ball_ball);
+  else
+    s.ball_ball_during_consolidation.reset();
   return s;
 }
 
@@ -219,6 +225,10 @@ ShearScenario parse_shear_scenario(std::string_view text, const std::string& sou
     sc.during_shear = read_patch(*n, P + ".during_shear");
     validate(apply(sc.during_shear, sc.ball_ball), P + ".during_shear");
   }
+  if (const toml::node* n = t.get("during_consolidation")) {
+    sc.during_consolidation = read_patch(*n, P + ".during_consolidation");
+    validate(apply(sc.during_consolidation, sc.ball_ball), P + ".during_consolidation");
+  }
   if (auto v = opt_number(
           t, P, "servo_gain_factor", [](double x) { return x > 0 && x <= 1; },
           "the servo's alpha: in (0, 1] [-]"))
@@ -295,6 +305,7 @@ std::string resolved_shear_toml(const ShearScenario& sc) {
   o += fmt::format("strain = \"{}\"\n", s.strain == StrainDefinition::height ? "height" : "length");
   o += "ball_wall = " + contact_inline(s.ball_wall) + "\n";
   o += "during_shear = " + inline_patch(sc.during_shear) + "\n";
+  o += "during_consolidation = " + inline_patch(sc.during_consolidation) + "\n";
   o += fmt::format("servo_gain_factor = {}\nservo_max_speed_m_per_s = {}\n"
                    "servo_integral_time_s = {}\n",
                    num(s.servo_gain_factor), num(s.servo_max_speed_m_per_s),

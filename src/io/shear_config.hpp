@@ -26,6 +26,7 @@ struct ShearScenario {
   SpecimenSpec specimen;                  // [specimen]; its region is the box [0, L]x[0, W]x[0, H]
   ContactProperties ball_ball;            // [contact.ball_ball], complete
   ContactPatch during_shear;              // shear.during_shear: patch over ball_ball while shearing
+  ContactPatch during_consolidation;      // shear.during_consolidation: patch over ball_ball before
   DirectShearSpec test;                   // every [shear] setting; normal_stress_Pa unused
   std::vector<double> normal_stresses_Pa; // one run each [Pa]
   double local_damping = 0.7;             // Cundall local damping (Table 1) [-]
@@ -34,7 +35,8 @@ struct ShearScenario {
   double checkpoint_interval_min = 10;    // wall-clock minutes between checkpoints (0 = none) [min]
 
   // The spec of one run at `normal_stress_Pa` (ball_ball_during_shear set
-  // when during_shear names any key).
+  // when during_shear names any key, ball_ball_during_consolidation when
+  // during_consolidation does).
   DirectShearSpec run_spec(double normal_stress_Pa) const;
 };
 

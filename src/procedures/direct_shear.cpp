@@ -61,6 +61,10 @@ void validate(const DirectShearSpec& s) {
           static_cast<double>(s.record_interval_steps), "must be > 0");
   validate(s.ball_wall, "shear.ball_wall");
   if (s.ball_ball_during_shear) validate(*s.ball_ball_during_shear, "shear.ball_ball_during_shear");
+  if (s.ball_ball_during_consolidation) {
+    validate(*s.ball_ball_during_consolidation, "shear.during_consolidation");
+    validate(s.ball_ball, "contact.ball_ball");
+  }
 }
 
 void add_shear_box(World& w, const ShearBox& b, const ContactProperties& ball_wall,
@@ -130,6 +134,7 @@ std::string save_state(const ShearProgressState& p, double wall_seconds_now,
               {"consolidation_steps", r.consolidation_steps},
               {"consolidated_height_m", r.consolidated_height_m},
               {"consolidated_normal_stress_Pa", r.consolidated_normal_stress_Pa},
+              {"consolidated_porosity", r.consolidated_porosity},
               {"peak_shear_stress_Pa", r.peak_shear_stress_Pa},
               {"peak_strain", r.peak_strain},
               {"worst_normal_stress_deviation", r.worst_normal_stress_deviation},
@@ -159,6 +164,7 @@ ShearProgressState load_state(const std::string& blob, const std::string& path) 
     r.consolidation_steps = j.at("consolidation_steps");
     r.consolidated_height_m = j.at("consolidated_height_m");
     r.consolidated_normal_stress_Pa = j.at("consolidated_normal_stress_Pa");
+    r.consolidated_porosity = j.value("consolidated_porosity", 0.0); // absent before 2026-12
     r.peak_shear_stress_Pa = j.at("peak_shear_stress_Pa");
     r.peak_strain = j.at("peak_strain");
     r.worst_normal_stress_deviation = j.at("worst_normal_stress_deviation");
@@ -218,6 +224,12 @@ DirectShearResult run_direct_shear(World& w, const DirectShearSpec& s,
     servo.integral_time_s = s.servo_integral_time_s;
     w.set_wall_servo(bottom, servo);
     r.target_normal_stress_Pa = s.normal_stress_Pa;
+    if (s.ball_ball_during_consolidation) {
+      const ContactProperties& c = *s.ball_ball_during_consolidation;
+      w.set_ball_ball_defaults(c);
+      w.modify_ball_ball_contacts([](std::size_t, std::size_t) { return true; },
+                                  [&](ContactProperties& p) { p = c; });
+    }
     // Fit the specimen into the box: centres inside the box leave spheres
     // poking through the walls; push them in with calm cycles (velocities
     // zeroed, PFC `calm`) under a tolerant overlap guard.
@@ -249,6 +261,16 @@ DirectShearResult run_direct_shear(World& w, const DirectShearSpec& s,
     }
     r.consolidated_height_m = height();
     r.consolidated_normal_stress_Pa = normal_stress();
+    r.consolidated_porosity =
+        w.measure_region(Box{{0, 0, w.walls()[bottom].point.z},
+                             {s.box.length_m, s.box.width_m, w.walls()[top].point.z}})
+            .porosity;
+    // Prepared with other properties: now every contact is the material.
+    if (s.ball_ball_during_consolidation) {
+      w.set_ball_ball_defaults(s.ball_ball);
+      w.modify_ball_ball_contacts([](std::size_t, std::size_t) { return true; },
+                                  [&](ContactProperties& p) { p = s.ball_ball; });
+    }
     // Shearing: contact defaults for new contacts (paper: no adhesion for
     // contacts made while shearing), then the upper box moves in -x.
     if (s.ball_ball_during_shear) w.set_ball_ball_defaults(*s.ball_ball_during_shear);

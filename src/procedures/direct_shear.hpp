@@ -37,6 +37,14 @@ struct DirectShearSpec {
   double max_shear_displacement_m = 0.0013;           // stop at this displacement [m]
   StrainDefinition strain = StrainDefinition::height;
   ContactProperties ball_wall; // friction 0: smooth box (paper)
+  // Specimen preparation (not the paper's; docs/shear.md "Preparation"): when
+  // set, consolidation runs with these ball-ball properties (typically reduced
+  // friction, the usual way to reach a denser packing in PFC), and at the start
+  // of shearing every existing ball-ball contact and the defaults become
+  // `ball_ball`, the material under test. Unset: consolidation with whatever
+  // the World holds.
+  std::optional<ContactProperties> ball_ball_during_consolidation;
+  ContactProperties ball_ball; // the material; used only with ball_ball_during_consolidation
   std::optional<ContactProperties>
       ball_ball_during_shear;            // defaults for contacts made while shearing
   double servo_gain_factor = 0.5;        // alpha of the bottom-wall servo [-]
@@ -64,6 +72,7 @@ struct DirectShearResult {
   long consolidation_steps = 0;
   double consolidated_height_m = 0;
   double consolidated_normal_stress_Pa = 0; // bottom-wall stress when consolidation ended
+  double consolidated_porosity = 0;         // centre-based, inside the box, then [-]
   std::vector<ShearPoint> curve;
   double peak_shear_stress_Pa = 0;
   double peak_strain = 0;

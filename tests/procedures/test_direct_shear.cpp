@@ -26,10 +26,10 @@ struct Outcome {
   double peak_angle_deg;
 };
 
-void small_box(World& world, const ContactProperties& ball_ball) {
+void small_box(World& world, const ContactProperties& ball_ball, double porosity = 0.40) {
   SpecimenSpec spec;
   spec.bins = {{0.4e-3, 0.6e-3, 1.0}};
-  spec.porosity = 0.40;
+  spec.porosity = porosity;
   spec.density_kg_m3 = paper::density_kg_m3;
   spec.seed = 11;
   spec.brick_size_m = {3e-3, 3e-3, 3e-3};
@@ -94,6 +94,47 @@ TEST(DirectShear, ServoHoldsStressAndFrictionRaisesStrength) {
               b.result.worst_normal_stress_deviation);
 }
 
+// Preparation (docs/shear.md): a loose specimen (porosity 0.50 ignoring
+// overlaps, no contacts) consolidated with the material itself stays loose;
+// consolidated frictionless it packs denser, and then shears as the material:
+// every contact carries mu = 0.5 and mu_r = 0.16 from the start of shearing,
+// and the denser specimen is stronger. Measured (100 kPa, 0.25 mm of shear):
+// porosity 0.499 / 0.421, height 2.99 / 2.59 mm, peak tau 0.51 / 1.10 sigma.
+TEST(DirectShear, FrictionlessConsolidationPacksDenserThenShearsAsTheMaterial) {
+  const ContactProperties sand = paper::ball_ball(0.0);
+  ContactProperties smooth = sand;
+  smooth.friction = 0.0;
+  smooth.rolling_friction = 0.0;
+  WorldSettings ws;
+  ws.local_damping = paper::local_damping;
+  DirectShearSpec s = small_test(100e3);
+  s.max_shear_displacement_m = 0.25e-3;
+  World loose(ws), dense(ws);
+  small_box(loose, sand, 0.50);
+  small_box(dense, sand, 0.50);
+  const DirectShearResult a = run_direct_shear(loose, s);
+  s.ball_ball = sand;
+  s.ball_ball_during_consolidation = smooth;
+  const DirectShearResult b = run_direct_shear(dense, s);
+  std::printf("consolidated porosity %.4f (material) / %.4f (frictionless); height %.3f / %.3f mm; "
+              "peak tau / sigma %.3f / %.3f\n",
+              a.consolidated_porosity, b.consolidated_porosity, a.consolidated_height_m * 1e3,
+              b.consolidated_height_m * 1e3, a.peak_shear_stress_Pa / 100e3,
+              b.peak_shear_stress_Pa / 100e3);
+  EXPECT_GT(a.consolidated_porosity, 0.0);
+  EXPECT_LT(b.consolidated_porosity, a.consolidated_porosity - 0.02);
+  EXPECT_LT(b.consolidated_height_m, a.consolidated_height_m);
+  EXPECT_EQ(b.particles_lost, 0u);
+  EXPECT_GT(b.peak_shear_stress_Pa, 1.1 * a.peak_shear_stress_Pa);
+  EXPECT_EQ(dense.ball_ball_defaults().friction, sand.friction);
+  const auto contacts = dense.ball_ball_contacts();
+  ASSERT_GT(contacts.size(), 100u);
+  for (const ContactView& c : contacts) {
+    ASSERT_EQ(dense.property_set(c.properties).friction, sand.friction);
+    ASSERT_EQ(dense.property_set(c.properties).rolling_friction, sand.rolling_friction);
+  }
+}
+
 TEST(DirectShear, MohrCoulombFitRecoversALine) {
   const std::vector<double> s{40e3, 60e3, 80e3, 100e3, 120e3};
   std::vector<double> t;
@@ -113,12 +154,17 @@ TEST(DirectShear, BadSpecIsRejected) {
 
 // A test stopped by SIGINT (once in consolidation, once while shearing) and
 // resumed each time in a fresh World from its checkpoint ends bit for bit like
-// one that never stopped: same curve, same final positions.
+// one that never stopped: same curve, same final positions. The specimen is
+// prepared with other properties than it is sheared with, so the switch at
+// the start of shearing happens after a resume.
 TEST(DirectShear, StoppedAndResumedTestEndsBitForBitLikeAnUninterruptedOne) {
   const ContactProperties sand = paper::ball_ball(1.2e-4);
   DirectShearSpec s = small_test(100e3);
   s.max_shear_displacement_m = 0.1e-3;
   s.ball_ball_during_shear = paper::ball_ball(0.0); // the humid rule: F0 only before shearing
+  s.ball_ball = sand; // prepared with mu = 0.2, sheared as the material (crosses a resume)
+  s.ball_ball_during_consolidation = sand;
+  s.ball_ball_during_consolidation->friction = 0.2;
   WorldSettings ws;
   ws.local_damping = paper::local_damping;
 
