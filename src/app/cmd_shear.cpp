@@ -171,6 +171,7 @@ void run_one(const ShearScenario& sc, double sigma, int threads, const fs::path&
                       {"consolidated_height_m", r.consolidated_height_m},
                       {"consolidated_normal_stress_Pa", r.consolidated_normal_stress_Pa},
                       {"consolidated_porosity", r.consolidated_porosity},
+                      {"settling_steps", r.settling_steps},
                       {"shear_steps", r.curve.empty() ? 0L
                                                       : r.curve.back().step - r.curve.front().step +
                                                             spec.record_interval_steps},

@@ -101,6 +101,7 @@ struct ShearProgressState {
   long consolidation_first_step = 0; // world step when consolidation cycling began
   long fit_steps = 0;                // calm steps that fitted the specimen into the box
   long shear_first_step = 0;         // world step when shearing began
+  long switch_step = -1;             // prepared specimens: world step when the material came in
   double x0 = 0;                     // top wall x at the start of shearing [m]
   double t_start = 0;                // world time at the start of shearing [s]
   double sum_sigma = 0, sum_fx = 0;  // sums over the current record interval
@@ -123,6 +124,7 @@ std::string save_state(const ShearProgressState& p, double wall_seconds_now,
               {"consolidation_first_step", p.consolidation_first_step},
               {"fit_steps", p.fit_steps},
               {"shear_first_step", p.shear_first_step},
+              {"switch_step", p.switch_step},
               {"x0", p.x0},
               {"t_start", p.t_start},
               {"sum_sigma", p.sum_sigma},
@@ -135,6 +137,7 @@ std::string save_state(const ShearProgressState& p, double wall_seconds_now,
               {"consolidated_height_m", r.consolidated_height_m},
               {"consolidated_normal_stress_Pa", r.consolidated_normal_stress_Pa},
               {"consolidated_porosity", r.consolidated_porosity},
+              {"settling_steps", r.settling_steps},
               {"peak_shear_stress_Pa", r.peak_shear_stress_Pa},
               {"peak_strain", r.peak_strain},
               {"worst_normal_stress_deviation", r.worst_normal_stress_deviation},
@@ -152,6 +155,7 @@ ShearProgressState load_state(const std::string& blob, const std::string& path) 
     p.consolidation_first_step = j.at("consolidation_first_step");
     p.fit_steps = j.at("fit_steps");
     p.shear_first_step = j.at("shear_first_step");
+    p.switch_step = j.value("switch_step", -1L); // absent before 2026-12
     p.x0 = j.at("x0");
     p.t_start = j.at("t_start");
     p.sum_sigma = j.at("sum_sigma");
@@ -165,6 +169,7 @@ ShearProgressState load_state(const std::string& blob, const std::string& path) 
     r.consolidated_height_m = j.at("consolidated_height_m");
     r.consolidated_normal_stress_Pa = j.at("consolidated_normal_stress_Pa");
     r.consolidated_porosity = j.value("consolidated_porosity", 0.0); // absent before 2026-12
+    r.settling_steps = j.value("settling_steps", 0L);
     r.peak_shear_stress_Pa = j.at("peak_shear_stress_Pa");
     r.peak_strain = j.at("peak_strain");
     r.worst_normal_stress_deviation = j.at("worst_normal_stress_deviation");
@@ -212,6 +217,12 @@ DirectShearResult run_direct_shear(World& w, const DirectShearSpec& s,
   const Vec3 servo_direction{0, 0, 1}; // the bottom wall pushes up into the specimen
   auto normal_stress = [&] { return -dot(w.walls()[bottom].force, servo_direction) / area; };
   auto height = [&] { return w.walls()[top].point.z - w.walls()[bottom].point.z; };
+  auto porosity_now = [&] {
+    return w
+        .measure_region(Box{{0, 0, w.walls()[bottom].point.z},
+                            {s.box.length_m, s.box.width_m, w.walls()[top].point.z}})
+        .porosity;
+  };
   DirectShearResult& r = pr.r;
 
   if (!resume) {
@@ -246,31 +257,45 @@ DirectShearResult run_direct_shear(World& w, const DirectShearSpec& s,
   // Consolidation: upper box fixed, servo on the bottom wall.
   if (pr.phase == 0) {
     const long fit_steps = pr.fit_steps;
+    const bool prepared = s.ball_ball_during_consolidation.has_value();
+    // Consolidation, then (prepared specimens) settling with the material.
     for (;;) {
       const long into = w.step_count() - pr.consolidation_first_step;
-      if (fit_steps + into >= s.consolidation_max_steps) break;
-      cyc.advance(check - into % check);
-      r.consolidation_steps = fit_steps + (w.step_count() - pr.consolidation_first_step);
-      const double sigma = normal_stress();
-      const double err = std::abs(sigma - s.normal_stress_Pa) / s.normal_stress_Pa;
-      const double ratio = w.mean_unbalanced_force_ratio();
-      if (ck.consolidation_progress)
-        ck.consolidation_progress({r.consolidation_steps, sigma, ratio});
-      if (err < s.consolidation_stress_tolerance && ratio < s.consolidation_ratio) break;
+      const bool out_of_steps = pr.switch_step < 0
+                                    ? fit_steps + into >= s.consolidation_max_steps
+                                    : w.step_count() - pr.switch_step >= s.consolidation_max_steps;
+      bool done = out_of_steps;
+      if (!out_of_steps) {
+        cyc.advance(check - into % check);
+        r.consolidation_steps = fit_steps + (w.step_count() - pr.consolidation_first_step);
+        const double sigma = normal_stress();
+        const double err = std::abs(sigma - s.normal_stress_Pa) / s.normal_stress_Pa;
+        const double ratio = w.mean_unbalanced_force_ratio();
+        if (ck.consolidation_progress)
+          ck.consolidation_progress({r.consolidation_steps, sigma, ratio});
+        done = err < s.consolidation_stress_tolerance && ratio < s.consolidation_ratio;
+      }
+      if (done && prepared && pr.switch_step < 0) {
+        // Packed: every contact and the defaults become the material. The
+        // servo's integral carried the packing's creep; it starts again from
+        // zero, and the specimen settles with its own properties before
+        // shearing (else the stiffer packing meets a servo still pushing).
+        w.set_ball_ball_defaults(s.ball_ball);
+        w.modify_ball_ball_contacts([](std::size_t, std::size_t) { return true; },
+                                    [&](ContactProperties& p) { p = s.ball_ball; });
+        WallServo servo = w.walls()[bottom].servo;
+        servo.error_integral_N_s = 0;
+        w.set_wall_servo(bottom, servo);
+        pr.switch_step = w.step_count();
+        done = false;
+      }
+      if (done) break;
       cyc.at_check();
     }
+    r.settling_steps = pr.switch_step < 0 ? 0 : w.step_count() - pr.switch_step;
     r.consolidated_height_m = height();
+    r.consolidated_porosity = porosity_now();
     r.consolidated_normal_stress_Pa = normal_stress();
-    r.consolidated_porosity =
-        w.measure_region(Box{{0, 0, w.walls()[bottom].point.z},
-                             {s.box.length_m, s.box.width_m, w.walls()[top].point.z}})
-            .porosity;
-    // Prepared with other properties: now every contact is the material.
-    if (s.ball_ball_during_consolidation) {
-      w.set_ball_ball_defaults(s.ball_ball);
-      w.modify_ball_ball_contacts([](std::size_t, std::size_t) { return true; },
-                                  [&](ContactProperties& p) { p = s.ball_ball; });
-    }
     // Shearing: contact defaults for new contacts (paper: no adhesion for
     // contacts made while shearing), then the upper box moves in -x.
     if (s.ball_ball_during_shear) w.set_ball_ball_defaults(*s.ball_ball_during_shear);

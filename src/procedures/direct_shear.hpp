@@ -40,9 +40,10 @@ struct DirectShearSpec {
   // Specimen preparation (not the paper's; docs/shear.md "Preparation"): when
   // set, consolidation runs with these ball-ball properties (typically reduced
   // friction, the usual way to reach a denser packing in PFC), and at the start
-  // of shearing every existing ball-ball contact and the defaults become
-  // `ball_ball`, the material under test. Unset: consolidation with whatever
-  // the World holds.
+  // of consolidation every existing ball-ball contact and the defaults become
+  // `ball_ball`, the material under test, and the specimen settles with it
+  // under the servo (same criteria) before shearing. Unset: consolidation
+  // with whatever the World holds.
   std::optional<ContactProperties> ball_ball_during_consolidation;
   ContactProperties ball_ball; // the material; used only with ball_ball_during_consolidation
   std::optional<ContactProperties>
@@ -73,6 +74,9 @@ struct DirectShearResult {
   double consolidated_height_m = 0;
   double consolidated_normal_stress_Pa = 0; // bottom-wall stress when consolidation ended
   double consolidated_porosity = 0;         // centre-based, inside the box, then [-]
+  // Prepared specimens: steps to settle with the material after the packing
+  // (included in consolidation_steps) [-]
+  long settling_steps = 0;
   std::vector<ShearPoint> curve;
   double peak_shear_stress_Pa = 0;
   double peak_strain = 0;

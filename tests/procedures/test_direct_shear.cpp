@@ -117,14 +117,18 @@ TEST(DirectShear, FrictionlessConsolidationPacksDenserThenShearsAsTheMaterial) {
   s.ball_ball_during_consolidation = smooth;
   const DirectShearResult b = run_direct_shear(dense, s);
   std::printf("consolidated porosity %.4f (material) / %.4f (frictionless); height %.3f / %.3f mm; "
-              "peak tau / sigma %.3f / %.3f\n",
+              "peak tau / sigma %.3f / %.3f; worst sigma deviation %.3f / %.3f\n",
               a.consolidated_porosity, b.consolidated_porosity, a.consolidated_height_m * 1e3,
               b.consolidated_height_m * 1e3, a.peak_shear_stress_Pa / 100e3,
-              b.peak_shear_stress_Pa / 100e3);
+              b.peak_shear_stress_Pa / 100e3, a.worst_normal_stress_deviation,
+              b.worst_normal_stress_deviation);
   EXPECT_GT(a.consolidated_porosity, 0.0);
   EXPECT_LT(b.consolidated_porosity, a.consolidated_porosity - 0.02);
   EXPECT_LT(b.consolidated_height_m, a.consolidated_height_m);
   EXPECT_EQ(b.particles_lost, 0u);
+  EXPECT_EQ(a.settling_steps, 0);
+  EXPECT_GT(b.settling_steps, 0) << "settles with the material before shearing";
+  EXPECT_LT(b.worst_normal_stress_deviation, 0.06);
   EXPECT_GT(b.peak_shear_stress_Pa, 1.1 * a.peak_shear_stress_Pa);
   EXPECT_EQ(dense.ball_ball_defaults().friction, sand.friction);
   const auto contacts = dense.ball_ball_contacts();
