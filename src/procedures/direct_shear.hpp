@@ -39,7 +39,7 @@ struct DirectShearSpec {
   ContactProperties ball_wall; // friction 0: smooth box (paper)
   // Specimen preparation (not the paper's; docs/shear.md "Preparation"): when
   // set, consolidation runs with these ball-ball properties (typically reduced
-  // friction, the usual way to reach a denser packing in PFC), and at the start
+  // friction, the usual way to reach a denser packing in PFC), and at the end
   // of consolidation every existing ball-ball contact and the defaults become
   // `ball_ball`, the material under test, and the specimen settles with it
   // under the servo (same criteria) before shearing. Unset: consolidation
