@@ -6,6 +6,7 @@
 // the normal stress, dry peak fit R^2 > 0.98, humid cohesion above dry).
 // See docs/shear.md for the measured run times (hours per pressure).
 #include "core/world.hpp"
+#include "io/csv.hpp"
 #include "io/shear_config.hpp"
 #include "procedures/direct_shear.hpp"
 #include "procedures/specimen.hpp"
@@ -18,7 +19,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 #include <numbers>
-#include <sstream>
+#include <stdexcept>
 #include <string>
 
 using namespace centridem;
@@ -48,17 +49,18 @@ void expect_peak_then_level(const std::vector<std::pair<double, double>>& strain
   EXPECT_LE(last, 1.05 * middle) << what << ": still hardening";
 }
 
+// strain and shear stress of a curve CSV (columns as cmd_shear writes them:
+// step,time_s,shear_displacement_m,shear_strain,shear_stress_Pa,...).
 std::vector<std::pair<double, double>> read_curve(const std::filesystem::path& csv) {
   std::ifstream in(csv);
   std::string line;
-  std::getline(in,
-               line); // header: step,time_s,shear_displacement_m,shear_strain,shear_stress_Pa,...
+  std::getline(in, line); // header
   std::vector<std::pair<double, double>> c;
-  while (std::getline(in, line)) {
-    std::stringstream ss(line);
-    std::string f[5];
-    for (auto& x : f) std::getline(ss, x, ',');
-    c.emplace_back(std::stod(f[3]), std::stod(f[4]));
+  for (int n = 2; std::getline(in, line); ++n) {
+    const auto f = split_commas(line);
+    const std::string where = csv.string() + ":" + std::to_string(n);
+    if (f.size() < 5) throw std::runtime_error(where + ": fewer than 5 columns");
+    c.emplace_back(parse_finite_number(f[3], where), parse_finite_number(f[4], where));
   }
   return c;
 }
