@@ -139,6 +139,65 @@ TEST(DirectShear, FrictionlessConsolidationPacksDenserThenShearsAsTheMaterial) {
   }
 }
 
+// The humid example packs without adhesion (examples/paper/shear_humid.toml,
+// docs/shear.md "Preparation"): its specimen is then the dry one, step for
+// step, and F0 arrives on every contact at the switch, before shearing. The
+// dry and the humid sets differ only by the adhesion (a paired comparison).
+TEST(DirectShear, HumidSpecimenPackedWithoutAdhesionIsTheDrySpecimen) {
+  ContactProperties dry = paper::ball_ball(0.0);
+  dry.model = ContactModel::rrlinear;
+  const ContactProperties humid = paper::ball_ball(1.2e-4);
+  WorldSettings ws;
+  ws.local_damping = paper::local_damping;
+  DirectShearSpec s = small_test(100e3);
+  s.max_shear_displacement_m = 0.02e-3;
+  World a(ws), b(ws);
+  small_box(a, dry);
+  small_box(b, humid);
+  s.ball_ball = dry;
+  s.ball_ball_during_consolidation = dry;
+  s.ball_ball_during_consolidation->friction = 0.2;
+  s.ball_ball_during_consolidation->rolling_friction = 0.0;
+  // Every consolidation check (steps, bottom-wall stress, unbalanced-force ratio).
+  std::vector<ConsolidationState> ca, cb;
+  DirectShearCheckpoints cka, ckb; // no checkpoint files
+  cka.consolidation_progress = [&](const ConsolidationState& c) { ca.push_back(c); };
+  ckb.consolidation_progress = [&](const ConsolidationState& c) { cb.push_back(c); };
+  const DirectShearResult ra = run_direct_shear(a, s, {}, cka);
+  s.ball_ball = humid;
+  s.ball_ball_during_shear = paper::ball_ball(0.0); // F0 only for contacts made before shearing
+  s.ball_ball_during_consolidation = humid;
+  s.ball_ball_during_consolidation->friction = 0.2;
+  s.ball_ball_during_consolidation->rolling_friction = 0.0;
+  s.ball_ball_during_consolidation->attraction_force_N = 0.0;
+  const DirectShearResult rb = run_direct_shear(b, s, {}, ckb);
+  const long packed = ra.consolidation_steps - ra.settling_steps;
+  std::printf("packed in %ld / %ld steps, then settled in %ld / %ld; porosity %.5f / %.5f (dry / "
+              "humid)\n",
+              packed, rb.consolidation_steps - rb.settling_steps, ra.settling_steps,
+              rb.settling_steps, ra.consolidated_porosity, rb.consolidated_porosity);
+  // The same packing, bit for bit, up to the switch: the same stress and
+  // unbalanced-force ratio at every check.
+  EXPECT_GT(ra.settling_steps, 0);
+  EXPECT_EQ(packed, rb.consolidation_steps - rb.settling_steps);
+  std::size_t checks = 0;
+  for (std::size_t k = 0; k < std::min(ca.size(), cb.size()) && ca[k].steps <= packed; ++k) {
+    ++checks;
+    ASSERT_EQ(ca[k].steps, cb[k].steps);
+    ASSERT_EQ(ca[k].normal_stress_Pa, cb[k].normal_stress_Pa) << "step " << ca[k].steps;
+    ASSERT_EQ(ca[k].unbalanced_force_ratio, cb[k].unbalanced_force_ratio) << "step " << ca[k].steps;
+  }
+  EXPECT_GT(checks, 10u);
+  // Then the adhesion: every contact that existed at the switch carries F0.
+  std::size_t adhesive = 0;
+  for (const ContactView& c : b.ball_ball_contacts())
+    if (b.property_set(c.properties).attraction_force_N == humid.attraction_force_N) ++adhesive;
+  EXPECT_GT(adhesive, 100u);
+  EXPECT_EQ(b.ball_ball_defaults().attraction_force_N, 0.0)
+      << "none on contacts made while shearing";
+  EXPECT_NE(ra.curve.front().shear_stress_Pa, rb.curve.front().shear_stress_Pa);
+}
+
 TEST(DirectShear, MohrCoulombFitRecoversALine) {
   const std::vector<double> s{40e3, 60e3, 80e3, 100e3, 120e3};
   std::vector<double> t;
