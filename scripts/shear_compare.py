@@ -6,18 +6,20 @@ Usage: python3 scripts/shear_compare.py DRY_DIR HUMID_DIR
 For every normal pressure finished in both folders (shear_<kPa>kPa.json) prints a markdown table:
 peak and residual shear stress of each (kPa) and their differences. Then the Mohr-Coulomb fits
 (tau = c + sigma tan(phi), least squares, as `centridem shear` fits them) of each folder's peaks
-and residuals over those common pressures. Least squares is linear, so the difference of the two
+and residuals over those common pressures, and the difference of the mean shear stress over six
+equal windows of the shear strain (from the shear_<kPa>kPa.csv curves). Least squares is linear, so the difference of the two
 fits is the fit of the differences. With specimens packed the same way (docs/shear.md
 "Preparation") the differences are the effect of what differs between the two scenarios alone.
 Standard library only.
 """
-import glob, json, math, os, sys
+import csv, glob, json, math, os, sys
 
 
 def runs(d):
     out = {}
     for f in glob.glob(os.path.join(d, 'shear_*kPa.json')):
         j = json.load(open(f))
+        j['csv_path'] = f[:-len('.json')] + '.csv'
         out[j['normal_stress_target_Pa']] = j
     return out
 
@@ -51,6 +53,34 @@ for s in common:
     print('| {:g} | {:.2f} | {:.2f} | {:+.2f} | {:.2f} | {:.2f} | {:+.2f} |'.format(
         s / 1e3, pa / 1e3, pb / 1e3, (pb - pa) / 1e3, ra / 1e3, rb / 1e3, (rb - ra) / 1e3))
 print()
+
+
+def curve(j):
+    with open(j['csv_path']) as f:
+        return [(float(r['shear_strain']), float(r['shear_stress_Pa'])) for r in csv.DictReader(f)]
+
+
+def window_means(c, edges):
+    m = []
+    for lo, hi in zip(edges, edges[1:]):
+        v = [t for e, t in c if lo <= e <= hi]
+        m.append(sum(v) / len(v) if v else float('nan'))
+    return m
+
+
+final = min(min(curve(a[s])[-1][0], curve(b[s])[-1][0]) for s in common)
+edges = [final * k / 6 for k in range(7)]
+print('Difference ({} − {}) of the mean τ over windows of the shear strain (kPa):'.format(nb, na))
+print()
+print('| σn (kPa) | ' + ' | '.join('{:.1f}–{:.1f} %'.format(100 * lo, 100 * hi)
+                                    for lo, hi in zip(edges, edges[1:])) + ' |')
+print('|---|' + '---|' * 6)
+for s in common:
+    ma = window_means(curve(a[s]), edges)
+    mb = window_means(curve(b[s]), edges)
+    print('| {:g} | '.format(s / 1e3) + ' | '.join('{:+.2f}'.format((y - x) / 1e3)
+                                                    for x, y in zip(ma, mb)) + ' |')
+print()
 if len(common) < 2:
     print('one common pressure: no Mohr-Coulomb fit')
     sys.exit(0)
@@ -59,7 +89,7 @@ print('Mohr-Coulomb fits over the {} common pressures ({} kPa):'.format(
 for key in ('peak_shear_stress_Pa', 'residual_shear_stress_Pa'):
     fa = fit(common, [a[s][key] for s in common])
     fb = fit(common, [b[s][key] for s in common])
-    print('  {:8s} {}: c = {:.2f} kPa, phi = {:.2f} deg, R^2 = {:.4f}; {}: c = {:.2f} kPa, phi = '
+    print('- {:8s} {}: c = {:.2f} kPa, phi = {:.2f} deg, R^2 = {:.4f}; {}: c = {:.2f} kPa, phi = '
           '{:.2f} deg, R^2 = {:.4f}; difference: c {:+.2f} kPa, phi {:+.2f} deg'.format(
               key.split('_')[0], na, fa[0] / 1e3, fa[1], fa[2], nb, fb[0] / 1e3, fb[1], fb[2],
               (fb[0] - fa[0]) / 1e3, fb[1] - fa[1]))
