@@ -3,13 +3,15 @@
 
 Usage: python3 scripts/shear_compare.py DRY_DIR HUMID_DIR
 
-For every normal pressure finished in both folders (shear_<kPa>kPa.json) prints a markdown table:
-peak and residual shear stress of each (kPa) and their differences. Then the Mohr-Coulomb fits
-(tau = c + sigma tan(phi), least squares, as `centridem shear` fits them) of each folder's peaks
-and residuals over those common pressures, and the difference of the mean shear stress over six
-equal windows of the shear strain (from the shear_<kPa>kPa.csv curves). Least squares is linear, so the difference of the two
-fits is the fit of the differences. With specimens packed the same way (docs/shear.md
-"Preparation") the differences are the effect of what differs between the two scenarios alone.
+For every normal pressure finished in both folders (shear_<kPa>kPa.json), prints as markdown:
+1. peak and residual shear stress of each (kPa) and their differences;
+2. the difference of the mean shear stress over six equal windows of the shear strain (from the
+   shear_<kPa>kPa.csv curves);
+3. the Mohr-Coulomb fits (tau = c + sigma tan(phi), least squares, as `centridem shear` fits
+   them) of each folder's peaks and residuals over those common pressures. Least squares is
+   linear, so the difference of the two fits is the fit of the differences.
+With specimens packed the same way (docs/shear.md "Preparation") the differences are the effect
+of what differs between the two scenarios alone.
 Standard library only.
 """
 import csv, glob, json, math, os, sys
@@ -37,6 +39,26 @@ def fit(s, t):
     return c, math.degrees(math.atan(slope)), 1 - sse / stt if stt > 0 else 1.0
 
 
+def curve(j):
+    """(shear strain, shear stress [Pa]) of a run's curve CSV."""
+    with open(j['csv_path']) as f:
+        rows = csv.DictReader(f)
+        missing = {'shear_strain', 'shear_stress_Pa'} - set(rows.fieldnames or [])
+        if missing:
+            print('{}: no column {} (expected the header centridem shear writes)'.format(
+                j['csv_path'], ', '.join(sorted(missing))), file=sys.stderr)
+            sys.exit(2)
+        return [(float(r['shear_strain']), float(r['shear_stress_Pa'])) for r in rows]
+
+
+def window_means(c, edges):
+    m = []
+    for lo, hi in zip(edges, edges[1:]):
+        v = [t for e, t in c if lo <= e < hi or (hi == edges[-1] and e == hi)]
+        m.append(sum(v) / len(v) if v else float('nan'))
+    return m
+
+
 if len(sys.argv) != 3:
     sys.exit(__doc__)
 a, b = runs(sys.argv[1]), runs(sys.argv[2])
@@ -55,20 +77,9 @@ for s in common:
 print()
 
 
-def curve(j):
-    with open(j['csv_path']) as f:
-        return [(float(r['shear_strain']), float(r['shear_stress_Pa'])) for r in csv.DictReader(f)]
 
-
-def window_means(c, edges):
-    m = []
-    for lo, hi in zip(edges, edges[1:]):
-        v = [t for e, t in c if lo <= e <= hi]
-        m.append(sum(v) / len(v) if v else float('nan'))
-    return m
-
-
-final = min(min(curve(a[s])[-1][0], curve(b[s])[-1][0]) for s in common)
+curves = {s: (curve(a[s]), curve(b[s])) for s in common}
+final = min(min(ca[-1][0], cb[-1][0]) for ca, cb in curves.values())
 edges = [final * k / 6 for k in range(7)]
 print('Difference ({} − {}) of the mean τ over windows of the shear strain (kPa):'.format(nb, na))
 print()
@@ -76,8 +87,7 @@ print('| σn (kPa) | ' + ' | '.join('{:.1f}–{:.1f} %'.format(100 * lo, 100 * h
                                     for lo, hi in zip(edges, edges[1:])) + ' |')
 print('|---|' + '---|' * 6)
 for s in common:
-    ma = window_means(curve(a[s]), edges)
-    mb = window_means(curve(b[s]), edges)
+    ma, mb = (window_means(c, edges) for c in curves[s])
     print('| {:g} | '.format(s / 1e3) + ' | '.join('{:+.2f}'.format((y - x) / 1e3)
                                                     for x, y in zip(ma, mb)) + ' |')
 print()

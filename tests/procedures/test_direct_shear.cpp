@@ -195,6 +195,8 @@ TEST(DirectShear, HumidSpecimenPackedWithoutAdhesionIsTheDrySpecimen) {
   EXPECT_GT(adhesive, 100u);
   EXPECT_EQ(b.ball_ball_defaults().attraction_force_N, 0.0)
       << "none on contacts made while shearing";
+  ASSERT_FALSE(ra.curve.empty());
+  ASSERT_FALSE(rb.curve.empty());
   EXPECT_NE(ra.curve.front().shear_stress_Pa, rb.curve.front().shear_stress_Pa);
 }
 
