@@ -361,6 +361,15 @@ int run_shear_command(const ShearCommandOptions& o) {
         validate(sc.run_spec(sigmas.back()));
       }
     }
+    // Each pressure's files are named by its label (shear_<kPa>kPa.*): two
+    // runs with one label would write over each other.
+    for (std::size_t i = 0; i < sigmas.size(); ++i)
+      for (std::size_t j = 0; j < i; ++j)
+        if (kpa_label(sigmas[i]) == kpa_label(sigmas[j]))
+          throw InputError(o.pressures_kPa.empty() ? "shear.normal_stresses_Pa" : "--pressure",
+                           kpa_label(sigmas[i]) + " kPa (given twice)",
+                           "each normal pressure once, as files are named by it (shear_" +
+                               kpa_label(sigmas[i]) + "kPa.*)");
     std::string out_s = o.out_dir;
     if (out_s.empty()) {
       std::string stem = fs::path(o.scenario).stem().string();
@@ -408,11 +417,14 @@ int run_shear_command(const ShearCommandOptions& o) {
   if (stop_signal() && failed_rc == 0) failed_rc = 128 + stop_signal();
   const bool interrupted = failed_rc > 128;
 
-  // Collect.
+  // Collect, by rising normal stress whatever order the runs went in (the
+  // summary, the table and the plot legends read upwards).
+  std::vector<double> by_pressure = sigmas;
+  std::sort(by_pressure.begin(), by_pressure.end());
   std::vector<double> done_sigmas;
   std::vector<nlohmann::json> runs;
   std::vector<std::pair<double, PartialCurve>> unfinished; // curves so far, plotted dashed
-  for (double s : sigmas) {
+  for (double s : by_pressure) {
     const fs::path p = out / (run_stem(s) + ".json");
     if (!fs::exists(p)) {
       unfinished.emplace_back(s, read_partial_curve(out / (run_stem(s) + ".csv")));

@@ -126,3 +126,43 @@ TEST(ShearReport, FinishedAndUnfinishedRunsAreReportedAndABadCsvLineIsNamed) {
   EXPECT_NE(bad.find("abc"), std::string::npos) << bad;
   fs::remove_all(dir);
 }
+
+// Pressures run in the order given (here the higher first), but the summary,
+// its table and the fits list them by rising normal stress. A pressure given
+// twice is refused before anything runs: both runs would write shear_100kPa.*.
+TEST(ShearReport, RunsAreListedByRisingPressureAndAPressureGivenTwiceIsRefused) {
+  const fs::path dir = fs::temp_directory_path() / "centridem_shear_order_test";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  { std::ofstream(dir / "scenario_in.toml") << kScenario; }
+  const fs::path out = dir / "run";
+  const std::string bin = CENTRIDEM_BINARY;
+  const std::string scen = (dir / "scenario_in.toml").string();
+  ASSERT_EQ(run(bin + " shear " + scen + " --pressure 150 --pressure 100 --out " + out.string() +
+                " > " + (dir / "run.log").string() + " 2>&1"),
+            0)
+      << slurp(dir / "run.log");
+  const nlohmann::json order = nlohmann::json::parse(slurp(out / "pressures.json"));
+  EXPECT_EQ(order["normal_stresses_Pa"], nlohmann::json({150e3, 100e3})) << "the run order";
+  const nlohmann::json s = nlohmann::json::parse(slurp(out / "summary.json"));
+  ASSERT_EQ(s["runs"].size(), 2u);
+  EXPECT_DOUBLE_EQ(s["runs"][0]["normal_stress_target_Pa"].get<double>(), 100e3);
+  EXPECT_DOUBLE_EQ(s["runs"][1]["normal_stress_target_Pa"].get<double>(), 150e3);
+  EXPECT_EQ(s["runs"][0]["curve_csv"], "shear_100kPa.csv");
+  const std::string log = slurp(dir / "run.log");
+  const auto table = log.find("phi_peak"); // the summary table's header
+  ASSERT_NE(table, std::string::npos) << log;
+  const auto row100 = log.find("  100 kPa", table), row150 = log.find("  150 kPa", table);
+  ASSERT_NE(row100, std::string::npos) << log;
+  ASSERT_NE(row150, std::string::npos) << log;
+  EXPECT_LT(row100, row150) << "the table reads upwards\n" << log;
+
+  const fs::path out2 = dir / "twice";
+  EXPECT_EQ(run(bin + " shear " + scen + " --pressure 100 --pressure 100 --out " + out2.string() +
+                " > " + (dir / "twice.log").string() + " 2>&1"),
+            2);
+  const std::string twice = slurp(dir / "twice.log");
+  EXPECT_NE(twice.find("--pressure = 100 kPa (given twice)"), std::string::npos) << twice;
+  EXPECT_FALSE(fs::exists(out2 / "pressures.json")) << "nothing may run";
+  fs::remove_all(dir);
+}
