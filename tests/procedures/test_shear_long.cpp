@@ -39,14 +39,18 @@ double mean_tau(const std::vector<std::pair<double, double>>& strain_tau, double
 }
 
 // "Rises to a peak and softens or plateaus": the mean stress over the last
-// 20 % of the strain is not above the mean over 40-60 % by more than 5 %. A
-// loose specimen that hardens throughout (docs/results/shear.md: +20-30 %
-// over that span) fails this.
+// 20 % of the strain is not above the mean over 40-60 % by more than 10 %. A
+// loose specimen that hardens throughout (docs/results/shear.md section 2:
+// 1.18-1.30 over its 20 % of strain, 1.14-1.37 over the first 15 %) fails this. The bound was 5 %
+// until the paper runs measured how much this ratio scatters for one material: at 120 kPa,
+// dry, 1.051 with seed 1 and 0.993 with seed 2, and 1.001 humid on the seed-1 packing; at 40-100
+// kPa 0.92-0.98. A bound inside that scatter would fail a plateau by the luck of the packing; 1.10
+// is above it and below the loose curves.
 void expect_peak_then_level(const std::vector<std::pair<double, double>>& strain_tau,
                             double final_strain, const std::string& what) {
   const double middle = mean_tau(strain_tau, 0.4 * final_strain, 0.6 * final_strain);
   const double last = mean_tau(strain_tau, 0.8 * final_strain, final_strain);
-  EXPECT_LE(last, 1.05 * middle) << what << ": still hardening";
+  EXPECT_LE(last, 1.10 * middle) << what << ": still hardening";
 }
 
 // strain and shear stress of a curve CSV (columns as cmd_shear writes them:
