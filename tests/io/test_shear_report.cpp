@@ -65,13 +65,20 @@ local_damping = 0.7
 threads = 1
 )";
 
+// A fresh folder under the temporary directory holding kScenario as
+// scenario_in.toml.
+fs::path fresh_dir_with_scenario(const std::string& name) {
+  const fs::path dir = fs::temp_directory_path() / name;
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  std::ofstream(dir / "scenario_in.toml") << kScenario;
+  return dir;
+}
+
 } // namespace
 
 TEST(ShearReport, FinishedAndUnfinishedRunsAreReportedAndABadCsvLineIsNamed) {
-  const fs::path dir = fs::temp_directory_path() / "centridem_shear_report_test";
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  { std::ofstream(dir / "scenario_in.toml") << kScenario; }
+  const fs::path dir = fresh_dir_with_scenario("centridem_shear_report_test");
   const fs::path out = dir / "run";
   const std::string bin = CENTRIDEM_BINARY;
   ASSERT_EQ(run(bin + " shear " + (dir / "scenario_in.toml").string() + " --out " + out.string() +
@@ -131,10 +138,7 @@ TEST(ShearReport, FinishedAndUnfinishedRunsAreReportedAndABadCsvLineIsNamed) {
 // its table and the fits list them by rising normal stress. A pressure given
 // twice is refused before anything runs: both runs would write shear_100kPa.*.
 TEST(ShearReport, RunsAreListedByRisingPressureAndAPressureGivenTwiceIsRefused) {
-  const fs::path dir = fs::temp_directory_path() / "centridem_shear_order_test";
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  { std::ofstream(dir / "scenario_in.toml") << kScenario; }
+  const fs::path dir = fresh_dir_with_scenario("centridem_shear_order_test");
   const fs::path out = dir / "run";
   const std::string bin = CENTRIDEM_BINARY;
   const std::string scen = (dir / "scenario_in.toml").string();
