@@ -138,9 +138,10 @@ void run_one(const ShearScenario& sc, double sigma, int threads, const fs::path&
       first = {now, p.shear_displacement_m};
       if (r.curve.size() == 1)
         log(fmt::format("consolidated in {} steps (sigma {:.1f} kPa, height {:.3f} mm, porosity "
-                        "{:.3f}); shearing",
+                        "{:.3f}, coordination {:.2f}); shearing",
                         r.consolidation_steps, r.consolidated_normal_stress_Pa / 1000,
-                        r.consolidated_height_m * 1e3, r.consolidated_porosity));
+                        r.consolidated_height_m * 1e3, r.consolidated_porosity,
+                        r.consolidated_coordination_number));
     }
     const double dt = std::chrono::duration<double>(now - last).count();
     if (dt < progress_interval_s) return;
@@ -171,6 +172,7 @@ void run_one(const ShearScenario& sc, double sigma, int threads, const fs::path&
                       {"consolidated_height_m", r.consolidated_height_m},
                       {"consolidated_normal_stress_Pa", r.consolidated_normal_stress_Pa},
                       {"consolidated_porosity", r.consolidated_porosity},
+                      {"consolidated_coordination_number", r.consolidated_coordination_number},
                       {"settling_steps", r.settling_steps},
                       {"shear_steps", r.curve.empty() ? 0L
                                                       : r.curve.back().step - r.curve.front().step +

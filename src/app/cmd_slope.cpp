@@ -6,6 +6,8 @@
 #include "io/output.hpp"
 #include "io/plot.hpp"
 #include "io/slope_config.hpp"
+#include "procedures/foundation.hpp"
+#include "procedures/slope_stability.hpp"
 #include "procedures/slope_trial.hpp"
 
 #include <CLI/CLI.hpp>
@@ -18,6 +20,7 @@
 #include <fstream>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <sstream>
 
 namespace centridem {
@@ -54,6 +57,7 @@ json read_json(const fs::path& p) {
 // --resume.
 struct Campaign {
   CampaignSpec spec;
+  bool auto_bracket = false; // search: bracket from the limit-equilibrium estimate, widened
   int threads = 1;
   std::string cache_dir;
 };
@@ -71,6 +75,7 @@ json campaign_json(const Campaign& c) {
           {"max_g", c.spec.max_g},
           {"max_slides", c.spec.max_slides},
           {"jobs", c.spec.jobs},
+          {"auto_bracket", c.auto_bracket},
           {"threads", c.threads},
           {"cache_dir", c.cache_dir}};
 }
@@ -90,6 +95,7 @@ Campaign campaign_from(const json& j, const std::string& path) {
     c.spec.max_g = j.at("max_g");
     c.spec.max_slides = j.at("max_slides");
     c.spec.jobs = j.at("jobs");
+    c.auto_bracket = j.value("auto_bracket", false);
     c.threads = j.at("threads");
     c.cache_dir = j.at("cache_dir");
     return c;
@@ -346,8 +352,20 @@ int run_slope_command(const SlopeCommandOptions& opt) {
                                   sc.slope.total_height_m * opt.scale}};
     }
     camp.spec = sc.campaign;
-    if ((!opt.g_levels.empty()) + (!opt.search.empty()) + (!opt.schedule.empty()) > 1)
-      throw InputError("--g / --search / --schedule", "more than one given", "one of them");
+    if ((!opt.g_levels.empty()) + (!opt.search.empty()) + (!opt.schedule.empty()) +
+            opt.search_auto >
+        1)
+      throw InputError("--g / --search / --search-auto / --schedule", "more than one given",
+                       "one of them");
+    if (opt.search_auto) {
+      if (!sc.limit_equilibrium.enabled)
+        throw InputError("--search-auto", "given",
+                         "a scenario with a [limit_equilibrium] table (c and phi of the soil): "
+                         "the bracket starts from its estimate");
+      camp.spec.kind = CampaignKind::search;
+      camp.spec.stable_g = camp.spec.failed_g = 0; // set from the estimate below
+      camp.auto_bracket = true;
+    }
     if (!opt.schedule.empty()) {
       const auto& q = opt.schedule;
       if (q.size() != 3 || !(q[0] > 0) || !(q[1] > 0) || !(q[2] >= q[0]) || !std::isfinite(q[2]) ||
@@ -411,6 +429,60 @@ int run_slope_command(const SlopeCommandOptions& opt) {
              camp.threads == 0 ? std::string("default") : std::to_string(camp.threads),
              out.string());
 
+  std::optional<FoundationResult> foundation;
+  if (sc.preparation.enabled) {
+    // The prepared foundation once, before any trial (they read it from the
+    // cache), in a child process (OpenMP threads must not exist in a process
+    // that forks trials) with every core the trials will use: its result does
+    // not depend on the thread count.
+    foundation = cached_foundation_result(sc, camp.cache_dir);
+    if (!foundation) {
+      const int threads = std::max(1, cs.jobs) * std::max(1, camp.threads);
+      const auto t_prep = Clock::now();
+      const std::vector<int> rc = run_jobs(
+          1, 2,
+          [&](std::size_t) {
+            ensure_prepared_foundation(
+                sc, camp.cache_dir, [](std::string_view l) { fmt::print(stderr, "{}\n", l); },
+                threads);
+          },
+          [](std::size_t) { return std::string("foundation"); });
+      if (rc.at(0) != 0) return rc[0];
+      foundation = cached_foundation_result(sc, camp.cache_dir);
+      if (!foundation) throw std::runtime_error("the prepared foundation was not cached");
+      fmt::print(stderr, "prepared foundation made in {:.0f} s\n", seconds_since(t_prep));
+    }
+    fmt::print(stderr,
+               "prepared foundation: {} particles, porosity by thirds {:.4f} / {:.4f} / {:.4f}, "
+               "coordination {:.2f} ({})\n",
+               foundation->particles, foundation->layer_porosity[0], foundation->layer_porosity[1],
+               foundation->layer_porosity[2], foundation->coordination_number,
+               prepared_foundation_path(sc, camp.cache_dir));
+  }
+  // The limit-equilibrium estimate (Bishop), and an automatic search bracket from it.
+  json limit_equilibrium = nullptr;
+  if (sc.limit_equilibrium.enabled) {
+    const double rho = limit_equilibrium_bulk_density(sc, foundation ? &*foundation : nullptr);
+    const SlopeLimitEquilibrium le = slope_limit_equilibrium(sc, geometry, rho);
+    limit_equilibrium = to_json(le, sc);
+    fmt::print(stderr,
+               "limit equilibrium (Bishop's simplified method): c = {:.3g} kPa, phi = {:.3g} deg, "
+               "bulk density {:.0f} kg/m^3: {} {:.1f} g\n",
+               1e-3 * le.cohesion_Pa, le.friction_angle_deg, rho,
+               le.critical.bracketed ? "critical g" : "critical g not bracketed in 1-1000 g:",
+               le.critical.g_level);
+    CampaignSpec& cs_mut = camp.spec;
+    if (camp.auto_bracket && cs_mut.stable_g == 0 && cs_mut.failed_g == 0) {
+      // The bracket: the estimate +- 20 %, on multiples of 5 g.
+      const double n = le.critical.g_level;
+      cs_mut.stable_g = std::max(5.0, 5.0 * std::floor(0.8 * n / 5.0));
+      cs_mut.failed_g = std::max(cs_mut.stable_g + 5.0, 5.0 * std::ceil(1.2 * n / 5.0));
+      replace_text_file((out / "campaign.json").string(), campaign_json(camp).dump(2) + "\n");
+      fmt::print(stderr, "search bracket from the estimate: [{:g}, {:g}] g\n", cs_mut.stable_g,
+                 cs_mut.failed_g);
+    }
+  }
+
   std::vector<TrialOutcome> trials;
   json critical = nullptr;
   std::string title_extra;
@@ -425,6 +497,27 @@ int run_slope_command(const SlopeCommandOptions& opt) {
     std::vector<TrialOutcome> ends = runner.run_levels({lo, hi});
     trials = ends;
     bool ok = runner.worst_code() == 0;
+    // A bracket from the estimate widens itself (at most 4 times): a failing
+    // lower end moves the bracket down, a stable upper end moves it up.
+    for (int widen = 0; camp.auto_bracket && ok && widen < 4; ++widen) {
+      const double width = hi - lo;
+      const bool down = ends[0].failed() && lo > 1.0;
+      if (!down && !(!ends[1].failed() && hi < 1e4)) break;
+      if (down) { // the failing lower end becomes the upper one
+        ends[1] = ends[0];
+        hi = lo;
+        lo = std::max(1.0, lo - width);
+      } else { // the stable upper end becomes the lower one
+        ends[0] = ends[1];
+        lo = hi;
+        hi = std::min(1e4, hi + width);
+      }
+      fmt::print(stderr, "bracket widened to [{:g}, {:g}] g\n", lo, hi);
+      const std::vector<TrialOutcome> more = runner.run_levels({down ? lo : hi});
+      ok = runner.worst_code() == 0;
+      trials.insert(trials.end(), more.begin(), more.end());
+      ends[down ? 0 : 1] = more.at(0);
+    }
     if (ok && ends[0].failed()) {
       critical = {{"below_g", lo}, {"note", "the slope already fails at the lower end"}};
       ok = false;
@@ -525,6 +618,7 @@ int run_slope_command(const SlopeCommandOptions& opt) {
   summary["soil_contact_attraction_force_N"] = sc.soil().attraction_force_N;
   summary["trials"] = rows;
   summary["critical_g"] = critical;
+  summary["limit_equilibrium"] = limit_equilibrium;
   summary["wall_seconds_this_process"] = seconds_since(t0);
   replace_text_file((out / "summary.json").string(), summary.dump(2) + "\n");
   replace_text_file((out / "summary.md").string(), md);
@@ -579,6 +673,9 @@ CLI::App* add_slope_subcommand(CLI::App& app) {
   cmd->add_option("--search", o->search,
                   "bracketing search for the critical g between STABLE and FAILED")
       ->expected(2);
+  cmd->add_flag("--search-auto", o->search_auto,
+                "critical-g search whose bracket starts from the limit-equilibrium estimate "
+                "(needs [limit_equilibrium]); it widens itself when an end is wrong");
   cmd->add_option("--schedule", o->schedule,
                   "one model, g raised from START by STEP up to MAX, each level held until "
                   "equilibrium or a slide (the centrifuge test's own loading)")

@@ -26,6 +26,7 @@ struct SlopeCommandOptions {
   std::string cache_dir;           // brick cache; "" = <out>/../cache
   std::vector<double> g_levels;    // --g: independent trials at these levels
   std::vector<double> search;      // --search STABLE FAILED
+  bool search_auto = false;        // --search-auto: the bracket from the limit-equilibrium estimate
   std::vector<double> schedule;    // --schedule START STEP MAX: one model, g raised in steps
   std::vector<std::string> set;    // --set KEY=VALUE: overrides of the scenario's keys
   double tolerance_g = 0;          // --tolerance (0: the scenario's)

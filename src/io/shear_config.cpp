@@ -31,7 +31,7 @@ using tomlread::path_of;
 using tomlread::show;
 using tomlread::where;
 
-const Keys kTopKeys = {"description", "specimen", "contact", "shear"};
+const Keys kTopKeys = {"description", "specimen", "contact", "preparation", "shear"};
 const Keys kContactSectionKeys = {"ball_ball"};
 const Keys kModelNames = {"linear", "rrlinear", "arrlinear"};
 const Keys kShearKeys = {"box",
@@ -41,7 +41,6 @@ const Keys kShearKeys = {"box",
                          "strain",
                          "ball_wall",
                          "during_shear",
-                         "during_consolidation",
                          "servo_gain_factor",
                          "servo_max_speed_m_per_s",
                          "servo_integral_time_s",
@@ -84,8 +83,8 @@ DirectShearSpec ShearScenario::run_spec(double normal_stress_Pa) const {
   else
     s.ball_ball_during_shear.reset();
   s.ball_ball = ball_ball;
-  if (!during_consolidation.empty())
-    s.ball_ball_during_consolidation = apply(during_consolidation, ball_ball);
+  if (preparation.enabled)
+    s.ball_ball_during_consolidation = apply(preparation.during_compaction, ball_ball);
   else
     s.ball_ball_during_consolidation.reset();
   return s;
@@ -142,7 +141,12 @@ ShearScenario parse_shear_scenario(std::string_view text, const std::string& sou
   const toml::node* sn = root.get(P);
   if (!sn) missing(P, "a [shear] table with at least normal_stresses_Pa (docs/shear.md)");
   const toml::table& t = as_table(*sn, P, "the direct shear test (docs/shear.md)");
-  check_keys(t, P, kShearKeys);
+  check_keys(t, P, kShearKeys, [](std::string_view k) -> std::string {
+    if (k == "during_consolidation")
+      return " (the preparation is shared with the slope now: give it as "
+             "[preparation] during_compaction = {...}, docs/specimens.md \"Preparation\")";
+    return {};
+  });
   DirectShearSpec& s = sc.test;
 
   // The box: by default the specimen's region, which must start at the origin.
@@ -225,9 +229,18 @@ ShearScenario parse_shear_scenario(std::string_view text, const std::string& sou
     sc.during_shear = read_patch(*n, P + ".during_shear");
     validate(apply(sc.during_shear, sc.ball_ball), P + ".during_shear");
   }
-  if (const toml::node* n = t.get("during_consolidation")) {
-    sc.during_consolidation = read_patch(*n, P + ".during_consolidation");
-    validate(apply(sc.during_consolidation, sc.ball_ball), P + ".during_consolidation");
+  // [preparation]: the compaction properties, and its ratio and step limit
+  // end the consolidation (which is then the preparation's compaction and
+  // settling); without it the [shear] keys below do.
+  sc.preparation = read_preparation(root, sc.ball_ball);
+  if (sc.preparation.enabled) {
+    for (std::string_view k : {"consolidation_ratio", "consolidation_max_steps"})
+      if (const toml::node* n = t.get(k))
+        fail(path_of(P, k), *n,
+             "no value here when the scenario has a [preparation] table: its ratio and "
+             "max_steps end the consolidation (docs/specimens.md \"Preparation\")");
+    s.consolidation_ratio = sc.preparation.ratio;
+    s.consolidation_max_steps = sc.preparation.max_steps;
   }
   if (auto v = opt_number(
           t, P, "servo_gain_factor", [](double x) { return x > 0 && x <= 1; },
@@ -292,6 +305,7 @@ std::string resolved_shear_toml(const ShearScenario& sc) {
   }
   o += resolved_specimen_toml(sc.specimen);
   o += "\n[contact]\nball_ball = " + contact_inline(sc.ball_ball) + "\n";
+  o += resolved_preparation_toml(sc.preparation);
   const DirectShearSpec& s = sc.test;
   o += "\n[shear]\n";
   o += fmt::format("box = {{ length_m = {}, width_m = {}, height_m = {}, plate_length_m = {} }}\n",
@@ -305,15 +319,15 @@ std::string resolved_shear_toml(const ShearScenario& sc) {
   o += fmt::format("strain = \"{}\"\n", s.strain == StrainDefinition::height ? "height" : "length");
   o += "ball_wall = " + contact_inline(s.ball_wall) + "\n";
   o += "during_shear = " + inline_patch(sc.during_shear) + "\n";
-  o += "during_consolidation = " + inline_patch(sc.during_consolidation) + "\n";
   o += fmt::format("servo_gain_factor = {}\nservo_max_speed_m_per_s = {}\n"
                    "servo_integral_time_s = {}\n",
                    num(s.servo_gain_factor), num(s.servo_max_speed_m_per_s),
                    num(s.servo_integral_time_s));
-  o += fmt::format("consolidation_ratio = {}\nconsolidation_stress_tolerance = {}\n",
-                   num(s.consolidation_ratio), num(s.consolidation_stress_tolerance));
-  o += fmt::format("consolidation_max_steps = {}\nrecord_interval_steps = {}\n",
-                   s.consolidation_max_steps, s.record_interval_steps);
+  if (!sc.preparation.enabled)
+    o += fmt::format("consolidation_ratio = {}\nconsolidation_max_steps = {}\n",
+                     num(s.consolidation_ratio), s.consolidation_max_steps);
+  o += fmt::format("consolidation_stress_tolerance = {}\nrecord_interval_steps = {}\n",
+                   num(s.consolidation_stress_tolerance), s.record_interval_steps);
   o += fmt::format("local_damping = {}\ng_level = {}\nthreads = {}\n", num(sc.local_damping),
                    num(sc.g_level), sc.threads);
   o += fmt::format("checkpoint_interval_min = {}\n", num(sc.checkpoint_interval_min));

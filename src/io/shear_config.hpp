@@ -8,6 +8,7 @@
 // explicit.
 #pragma once
 
+#include "io/preparation_config.hpp"
 #include "io/scenario.hpp"
 #include "io/specimen_config.hpp"
 #include "physics/contact_properties.hpp"
@@ -23,11 +24,11 @@ struct ShearScenario {
   std::string source_path; // the scenario file ("" when parsed from text)
   std::string base_dir;    // folder that relative paths are resolved against
   std::string description;
-  SpecimenSpec specimen;                  // [specimen]; its region is the box [0, L]x[0, W]x[0, H]
-  ContactProperties ball_ball;            // [contact.ball_ball], complete
-  ContactPatch during_shear;              // shear.during_shear: patch over ball_ball while shearing
-  ContactPatch during_consolidation;      // shear.during_consolidation: patch over ball_ball before
-  DirectShearSpec test;                   // every [shear] setting; normal_stress_Pa unused
+  SpecimenSpec specimen;       // [specimen]; its region is the box [0, L]x[0, W]x[0, H]
+  ContactProperties ball_ball; // [contact.ball_ball], complete
+  ContactPatch during_shear;   // shear.during_shear: patch over ball_ball while shearing
+  PreparationSpec preparation; // [preparation]: compaction properties, shared with the slope
+  DirectShearSpec test;        // every [shear] setting; normal_stress_Pa unused
   std::vector<double> normal_stresses_Pa; // one run each [Pa]
   double local_damping = 0.7;             // Cundall local damping (Table 1) [-]
   double g_level = 1.0;                   // gravity n g along -z [-]
@@ -36,7 +37,7 @@ struct ShearScenario {
 
   // The spec of one run at `normal_stress_Pa` (ball_ball_during_shear set
   // when during_shear names any key, ball_ball_during_consolidation when
-  // during_consolidation does).
+  // the scenario has a [preparation] table).
   DirectShearSpec run_spec(double normal_stress_Pa) const;
 };
 

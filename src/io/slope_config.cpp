@@ -19,8 +19,11 @@ namespace {
 
 using namespace tomlread;
 
-const Keys kTopKeys = {"description", "specimen", "contact", "slope",    "field",
-                       "moisture",    "trial",    "failure", "campaign", "output"};
+const Keys kTopKeys = {"description", "specimen", "preparation", "contact",
+                       "slope",       "field",    "moisture",    "limit_equilibrium",
+                       "trial",       "failure",  "campaign",    "output"};
+const Keys kLimitEquilibriumKeys = {"cohesion_Pa", "friction_angle_deg", "bulk_density_kg_m3",
+                                    "source"};
 const Keys kContactSectionKeys = {"ball_ball"};
 const Keys kModelNames = {"linear", "rrlinear", "arrlinear"};
 const Keys kSlopeKeys = {
@@ -33,6 +36,7 @@ const Keys kMoistureKeys = {"top_factor", "bottom_factor", "bands"};
 const Keys kTrialKeys = {"local_damping",
                          "equilibrium_ratio",
                          "foundation_max_steps",
+                         "rest_kinetic_ratio",
                          "check_interval_steps",
                          "max_time_s",
                          "after_failure_time_s",
@@ -269,6 +273,14 @@ SlopeScenario parse_slope_scenario(std::string_view text, const std::string& sou
     }
   }
 
+  // [preparation] (io/preparation_config.hpp): the foundation is generated
+  // overfilled, compacted, switched to the soil, settled and trimmed.
+  sc.preparation = read_preparation(root, sc.ball_ball);
+  if (sc.preparation.enabled && sc.specimen.source == SpecimenSpec::Source::file)
+    throw InputError("preparation", "a table",
+                     "only for a distributed specimen (the foundation is generated overfilled "
+                     "and trimmed): remove [preparation] or specimen.file");
+
   // [field]
   if (const toml::table* t = opt_table(root, "field", "the body field (docs/slope.md)")) {
     const std::string P = "field";
@@ -318,10 +330,37 @@ SlopeScenario parse_slope_scenario(std::string_view text, const std::string& sou
       sc.moisture.bands = static_cast<int>(*v);
   }
 
+  // [limit_equilibrium]
+  if (const toml::table* t = opt_table(root, "limit_equilibrium",
+                                       "the soil's c and phi for the limit-equilibrium estimate")) {
+    const std::string P = "limit_equilibrium";
+    check_keys(*t, P, kLimitEquilibriumKeys);
+    LimitEquilibriumSpec& le = sc.limit_equilibrium;
+    le.enabled = true;
+    const std::string c_allowed = "the soil's cohesion c >= 0 [Pa] (from the shear box on F0 / s)";
+    const std::string phi_allowed = "the soil's friction angle in (0, 90) [deg]";
+    auto c = opt_number(*t, P, "cohesion_Pa", non_negative, c_allowed);
+    if (!c) missing(P + ".cohesion_Pa", c_allowed);
+    auto phi = opt_number(
+        *t, P, "friction_angle_deg", [](double x) { return x > 0 && x < 90; }, phi_allowed);
+    if (!phi) missing(P + ".friction_angle_deg", phi_allowed);
+    le.cohesion_Pa = *c;
+    le.friction_angle_deg = *phi;
+    if (auto v = opt_number(
+            *t, P, "bulk_density_kg_m3", [](double x) { return x >= 0 && x <= 3e4; },
+            "the soil's bulk density: 0 (from the prepared foundation) to 30000 [kg/m^3]"))
+      le.bulk_density_kg_m3 = *v;
+    if (const toml::node* n = t->get("source"))
+      le.source = as_string(*n, P + ".source", "where c and phi come from (text)");
+    if (le.bulk_density_kg_m3 == 0 && !sc.preparation.enabled)
+      missing(P + ".bulk_density_kg_m3",
+              "the soil's bulk density > 0 [kg/m^3] (it is taken from the prepared foundation "
+              "only when the scenario has a [preparation] table)");
+  }
+
   // [trial]
   TrialSpec& tr = sc.trial;
-  tr.after_cut.rolling_friction = 0.0;
-  tr.after_cut.attraction_force_N = 0.0;
+  tr.after_cut.rolling_friction = 0.0; // the paper's rule (section 3.3)
   if (const toml::table* t = opt_table(root, "trial", "one trial's settings (docs/slope.md)")) {
     const std::string P = "trial";
     check_keys(*t, P, kTrialKeys);
@@ -333,6 +372,10 @@ SlopeScenario parse_slope_scenario(std::string_view text, const std::string& sou
     auto pos_long = [](long x) { return x > 0; };
     if (auto v = opt_integer(*t, P, "foundation_max_steps", pos_long, "a step limit > 0"))
       tr.foundation_max_steps = *v;
+    if (auto v = opt_number(
+            *t, P, "rest_kinetic_ratio", [](double x) { return x > 0 && x < 1; },
+            "kinetic energy / (weight x d50) below which a packing is at rest: in (0, 1) [-]"))
+      tr.rest_kinetic_ratio = *v;
     if (auto v = opt_integer(*t, P, "check_interval_steps", pos_long, "steps between checks > 0"))
       tr.check_interval_steps = *v;
     if (auto v = opt_number(*t, P, "max_time_s", positive, "trial time after the cut > 0 [s]"))
@@ -475,6 +518,7 @@ std::string resolved_slope_toml(const SlopeScenario& sc) {
   std::string o;
   if (!sc.description.empty()) o += "description = " + quote(sc.description) + "\n\n";
   o += resolved_specimen_toml(sc.specimen);
+  o += resolved_preparation_toml(sc.preparation);
   o += "\n[contact]\nball_ball = " + contact_inline(sc.ball_ball) + "\n";
   const BenchedSlope& b = sc.slope;
   o += "\n[slope]\n";
@@ -503,15 +547,21 @@ std::string resolved_slope_toml(const SlopeScenario& sc) {
     o +=
         fmt::format("\n[moisture]\ntop_factor = {}\nbottom_factor = {}\nbands = {}\n",
                     num(sc.moisture.top_factor), num(sc.moisture.bottom_factor), sc.moisture.bands);
+  if (const LimitEquilibriumSpec& le = sc.limit_equilibrium; le.enabled)
+    o += fmt::format("\n[limit_equilibrium]\ncohesion_Pa = {}\nfriction_angle_deg = {}\n"
+                     "bulk_density_kg_m3 = {}\nsource = {}\n",
+                     num(le.cohesion_Pa), num(le.friction_angle_deg), num(le.bulk_density_kg_m3),
+                     quote(le.source));
   const TrialSpec& t = sc.trial;
   o += fmt::format("\n[trial]\nlocal_damping = {}\nequilibrium_ratio = {}\n"
-                   "foundation_max_steps = {}\ncheck_interval_steps = {}\nmax_time_s = {}\n"
+                   "foundation_max_steps = {}\nrest_kinetic_ratio = {}\ncheck_interval_steps = {}\n"
+                   "max_time_s = {}\n"
                    "after_failure_time_s = {}\nafter_cut = {}\nat_cut = {}\nthreads = {}\n"
                    "checkpoint_interval_min = {}\ncheckpoint_interval_steps = {}\n",
                    num(t.local_damping), num(t.equilibrium_ratio), t.foundation_max_steps,
-                   t.check_interval_steps, num(t.max_time_s), num(t.after_failure_time_s),
-                   inline_patch(t.after_cut), inline_patch(t.at_cut), t.threads,
-                   num(t.checkpoint_interval_min), t.checkpoint_interval_steps);
+                   num(t.rest_kinetic_ratio), t.check_interval_steps, num(t.max_time_s),
+                   num(t.after_failure_time_s), inline_patch(t.after_cut), inline_patch(t.at_cut),
+                   t.threads, num(t.checkpoint_interval_min), t.checkpoint_interval_steps);
   const FailureCriteria& c = sc.failure;
   o += fmt::format("\n[failure]\ndisplacement_threshold_d50 = {}\ndisplacement_threshold_m = {}\n"
                    "link_distance_factor = {}\nmin_particles = {}\nmin_volume_fraction = {}\n"

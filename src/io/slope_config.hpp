@@ -1,6 +1,9 @@
 // Benched slope scenarios (`centridem slope SCENARIO.toml`, docs/slope.md):
 //   [specimen]           the foundation (docs/specimens.md); its region may be
 //                        left out: it is then the slope's DEM box
+//   [preparation]        optional: compaction, switch, settle and trim of the
+//                        foundation (io/preparation_config.hpp), shared with
+//                        the shear examples
 //   [contact.ball_ball]  the soil's contact properties (Table 1); F0 as
 //                        calibrated in the laboratory (divided by s in the
 //                        slope when slope.attraction_divided_by_s)
@@ -8,6 +11,7 @@
 //                        the chamber walls
 //   [field]              uniform n g / s, or a true radial centrifuge field
 //   [moisture]           optional: F0 graded with height (drier crest)
+//   [limit_equilibrium]  optional: c and phi for Bishop's critical-g estimate
 //   [trial]              one trial's stages and limits
 //   [failure]            failure detection (FailureCriteria keys)
 //   [campaign]           g-levels, a critical-g search or a stepped schedule
@@ -17,6 +21,7 @@
 // is allowed. The result is fully resolved: every default is explicit.
 #pragma once
 
+#include "io/preparation_config.hpp"
 #include "io/scenario.hpp"
 #include "io/specimen_config.hpp"
 #include "physics/contact_properties.hpp"
@@ -67,15 +72,35 @@ struct MoistureSpec {
   int bands = 10;             // `moisture.bands` (1 .. 1000)
 };
 
+// `[limit_equilibrium]`: the soil's strength for the classical estimate of
+// the critical g beside the DEM (procedures/slope_stability.hpp): c and phi
+// from the shear box run on the slope's own material (F0 / s) at the slope's
+// stresses (docs/slope.md "Limit equilibrium").
+struct LimitEquilibriumSpec {
+  bool enabled = false;
+  double cohesion_Pa = 0;        // `cohesion_Pa`: c >= 0 [Pa]
+  double friction_angle_deg = 0; // `friction_angle_deg`: phi in (0, 90) [deg]
+  // `bulk_density_kg_m3`: the soil's bulk density; 0 = from the prepared
+  // foundation (particle density x (1 - porosity)) [kg/m^3]
+  double bulk_density_kg_m3 = 0;
+  std::string source; // `source`: where c and phi come from (free text, for the summary)
+};
+
 struct TrialSpec {
   double local_damping = 0.7;         // Cundall local damping (Table 1) [-]
   double equilibrium_ratio = 1e-4;    // foundation: mean unbalanced-force ratio [-]
   long foundation_max_steps = 400000; // step limit of the foundation's equilibrium
+  // At rest also means little motion: kinetic energy / (weight x d50) below
+  // this (a packing without contacts falling freely is not at rest) [-].
+  double rest_kinetic_ratio = 1e-6;
   long check_interval_steps = 1000;   // steps between failure checks
   double max_time_s = 0.15;           // trial time after the cut [s, DEM]
   double after_failure_time_s = 0.05; // extra time to watch a slide after onset [s, DEM]
   // Contact defaults for contacts made after the cut (patch over the soil's):
-  // mu_r = 0 and F0 = 0 (paper section 3.2).
+  // mu_r = 0 (paper section 3.3: "mu_r was set to zero for all new ball-ball
+  // contact established during the sliding process"). The stricter rule of
+  // the shear box (no adhesion on new contacts either) is the option
+  // { rolling_friction = 0, attraction_force_N = 0 }.
   ContactPatch after_cut;
   // `trial.at_cut`: a patch applied to every contact that exists at the cut
   // (default: none), e.g. a strength reduction of the whole slope.
@@ -112,12 +137,14 @@ struct SlopeScenario {
   std::string description;
   std::string name; // `slope.name`: label on pictures ("lower first bench")
   SpecimenSpec specimen;
+  PreparationSpec preparation; // [preparation]: the foundation is prepared (and cached) when set
   ContactProperties ball_ball; // [contact.ball_ball] as given (laboratory F0)
   BenchedSlope slope;
   bool attraction_divided_by_s = true; // `slope.attraction_divided_by_s`
   ChamberWalls walls;
   FieldSpec field;
   MoistureSpec moisture;
+  LimitEquilibriumSpec limit_equilibrium;
   TrialSpec trial;
   FailureCriteria failure;
   CampaignSpec campaign;

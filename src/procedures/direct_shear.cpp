@@ -62,7 +62,7 @@ void validate(const DirectShearSpec& s) {
   validate(s.ball_wall, "shear.ball_wall");
   if (s.ball_ball_during_shear) validate(*s.ball_ball_during_shear, "shear.ball_ball_during_shear");
   if (s.ball_ball_during_consolidation) {
-    validate(*s.ball_ball_during_consolidation, "shear.during_consolidation");
+    validate(*s.ball_ball_during_consolidation, "preparation.during_compaction");
     validate(s.ball_ball, "contact.ball_ball");
   }
 }
@@ -137,6 +137,7 @@ std::string save_state(const ShearProgressState& p, double wall_seconds_now,
               {"consolidated_height_m", r.consolidated_height_m},
               {"consolidated_normal_stress_Pa", r.consolidated_normal_stress_Pa},
               {"consolidated_porosity", r.consolidated_porosity},
+              {"consolidated_coordination_number", r.consolidated_coordination_number},
               {"settling_steps", r.settling_steps},
               {"peak_shear_stress_Pa", r.peak_shear_stress_Pa},
               {"peak_strain", r.peak_strain},
@@ -169,6 +170,7 @@ ShearProgressState load_state(const std::string& blob, const std::string& path) 
     r.consolidated_height_m = j.at("consolidated_height_m");
     r.consolidated_normal_stress_Pa = j.at("consolidated_normal_stress_Pa");
     r.consolidated_porosity = j.value("consolidated_porosity", 0.0); // absent before 2026-12
+    r.consolidated_coordination_number = j.value("consolidated_coordination_number", 0.0);
     r.settling_steps = j.value("settling_steps", 0L);
     r.peak_shear_stress_Pa = j.at("peak_shear_stress_Pa");
     r.peak_strain = j.at("peak_strain");
@@ -294,6 +296,7 @@ DirectShearResult run_direct_shear(World& w, const DirectShearSpec& s,
     r.settling_steps = pr.switch_step < 0 ? 0 : w.step_count() - pr.switch_step;
     r.consolidated_height_m = height();
     r.consolidated_porosity = porosity_now();
+    r.consolidated_coordination_number = w.measure().coordination_number;
     r.consolidated_normal_stress_Pa = normal_stress();
     // Shearing: contact defaults for new contacts (paper: no adhesion for
     // contacts made while shearing), then the upper box moves in -x.

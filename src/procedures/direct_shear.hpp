@@ -72,8 +72,9 @@ struct DirectShearResult {
   double target_normal_stress_Pa = 0;
   long consolidation_steps = 0;
   double consolidated_height_m = 0;
-  double consolidated_normal_stress_Pa = 0; // bottom-wall stress when consolidation ended
-  double consolidated_porosity = 0;         // centre-based, inside the box, then [-]
+  double consolidated_normal_stress_Pa = 0;    // bottom-wall stress when consolidation ended
+  double consolidated_porosity = 0;            // centre-based, inside the box, then [-]
+  double consolidated_coordination_number = 0; // (2 Nbb + Nbw) / N, then [-]
   // Prepared specimens: steps to settle with the material after the packing
   // (included in consolidation_steps) [-]
   long settling_steps = 0;

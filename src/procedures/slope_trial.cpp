@@ -8,6 +8,7 @@
 #include "io/vtk.hpp"
 #include "physics/body_field.hpp"
 #include "procedures/checkpointed_cycling.hpp"
+#include "procedures/slope_stability.hpp"
 #include "procedures/specimen.hpp"
 
 #include <algorithm>
@@ -17,6 +18,7 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 #include <numbers>
+#include <optional>
 #include <unistd.h>
 
 namespace centridem {
@@ -29,61 +31,6 @@ namespace {
 
 double seconds_since(Clock::time_point t0) {
   return std::chrono::duration<double>(Clock::now() - t0).count();
-}
-
-double particle_volume(const ParticleStore& P) {
-  double v = 0;
-  for (double r : P.radius) v += 4.0 / 3.0 * std::numbers::pi * r * r * r;
-  return v;
-}
-
-// The settled surface: highest particle top (z + r) in columns 2 d50 wide
-// along x (over the whole breadth); min and mean over the columns [m].
-std::pair<double, double> surface_heights(const ParticleStore& P, double length_m, double d50) {
-  const double w = std::max(2 * d50, length_m / 1000);
-  const int n = std::max(1, static_cast<int>(length_m / w));
-  std::vector<double> top(static_cast<std::size_t>(n), 0.0);
-  for (std::size_t i = 0; i < P.size(); ++i) {
-    const int k = std::clamp(static_cast<int>(P.position[i].x / length_m * n), 0, n - 1);
-    top[static_cast<std::size_t>(k)] =
-        std::max(top[static_cast<std::size_t>(k)], P.position[i].z + P.radius[i]);
-  }
-  double mn = top[0], sum = 0;
-  for (double t : top) mn = std::min(mn, t), sum += t;
-  return {mn, sum / n};
-}
-
-json foundation_json(const FoundationResult& f) {
-  return {{"particles", f.particles},
-          {"steps", f.steps},
-          {"ratio", f.ratio},
-          {"converged", f.converged},
-          {"box_top_m", f.box_top_m},
-          {"surface_min_m", f.surface_min_m},
-          {"surface_mean_m", f.surface_mean_m},
-          {"settlement_m", f.box_top_m - f.surface_mean_m},
-          {"porosity_before", f.porosity_before},
-          {"porosity_after", f.porosity_after},
-          {"brick_particles", f.brick_particles},
-          {"brick_from_cache", f.brick_from_cache},
-          {"brick_file", f.brick_file}};
-}
-
-FoundationResult foundation_from(const json& j) {
-  FoundationResult f;
-  f.particles = j.at("particles");
-  f.steps = j.at("steps");
-  f.ratio = j.at("ratio");
-  f.converged = j.at("converged");
-  f.box_top_m = j.at("box_top_m");
-  f.surface_min_m = j.at("surface_min_m");
-  f.surface_mean_m = j.at("surface_mean_m");
-  f.porosity_before = j.at("porosity_before");
-  f.porosity_after = j.at("porosity_after");
-  f.brick_particles = j.at("brick_particles");
-  f.brick_from_cache = j.at("brick_from_cache");
-  f.brick_file = j.at("brick_file");
-  return f;
 }
 
 // The trial's progress, kept in the checkpoint's procedure blob.
@@ -133,7 +80,7 @@ std::string save_progress(const Progress& p, const FailureMonitor* monitor) {
             {"level_first_step", p.level_first_step},
             {"level_t0", p.level_t0},
             {"foundation_first_step", p.foundation_first_step},
-            {"foundation", foundation_json(p.foundation)},
+            {"foundation", to_json(p.foundation)},
             {"excavated", p.excavated},
             {"slope_particles", p.slope_particles},
             {"done_levels", p.done_levels},
@@ -157,7 +104,7 @@ Progress load_progress(const std::string& blob, json& monitor_state, const std::
     p.level_first_step = j.at("level_first_step");
     p.level_t0 = j.at("level_t0");
     p.foundation_first_step = j.at("foundation_first_step");
-    p.foundation = foundation_from(j.at("foundation"));
+    p.foundation = foundation_from_json(j.at("foundation"));
     p.excavated = j.at("excavated");
     p.slope_particles = j.at("slope_particles");
     for (const auto& l : j.at("done_levels")) p.done_levels.push_back(l);
@@ -239,57 +186,37 @@ SlopeTrialResult run_slope_trial(const SlopeScenario& sc, const SlopeTrialPlan& 
                                   : fmt::format("level {} g", plan.g_levels[pr.level])));
   } else {
     // ---------------------------------------------------------- foundation
-    const ContactProperties soil = sc.soil();
     const double L = geometry.length(), B = geometry.breadth();
-    world.add_wall(Wall::plane("floor", {0, 0, 0}, {0, 0, 1}), sc.walls.chamber);
-    world.add_wall(Wall::plane("back", {0, 0, 0}, {1, 0, 0}), sc.walls.chamber);
-    world.add_wall(Wall::plane("side_y0", {0, 0, 0}, {0, 1, 0}), sc.walls.chamber);
-    world.add_wall(Wall::plane("side_y1", {0, B, 0}, {0, -1, 0}), sc.walls.chamber);
-    if (sc.walls.end_wall) world.add_wall(Wall::plane("end", {L, 0, 0}, {-1, 0, 0}), sc.walls.end);
-    world.set_ball_ball_defaults(soil);
-
-    SpecimenSpec spec = sc.specimen;
-    std::string cached;
-    if (!o.cache_dir.empty() && spec.source == SpecimenSpec::Source::distribute &&
-        spec.brick_file.empty()) {
-      SpecimenSpec key = spec;
-      key.region.reset(); // the brick does not depend on the region
-      const std::uint64_t h = fnv1a(resolved_specimen_toml(key));
-      cached = (fs::path(o.cache_dir) / fmt::format("brick_{:016x}.json", h)).string();
-      if (fs::exists(cached)) {
-        spec.brick_file = spec.brick_file_path = cached;
-        pr.foundation.brick_from_cache = true;
-      }
-    }
     auto specimen_log = [&](std::string_view l) { say(std::string(l)); };
-    if (!cached.empty() && !pr.foundation.brick_from_cache) {
-      // Make the brick and cache it; the foundation is then always built from
-      // the cached file, so a first trial and a later one start alike.
-      const std::vector<GradationBin> bins = resolve_gradation(spec);
-      const Brick brick = make_brick(bins, spec.porosity, spec.brick_size_m, spec.density_kg_m3,
-                                     spec.group, spec.seed, spec.relax, specimen_log, threads);
-      make_directories(o.cache_dir);
-      const std::string tmp = cached + fmt::format(".tmp{}", static_cast<long>(::getpid()));
-      write_brick(brick, tmp);
-      fs::rename(tmp, cached); // atomic: parallel trials may race to write it
-      spec.brick_file = spec.brick_file_path = cached;
+    if (sc.preparation.enabled) {
+      // The prepared foundation, made once per recipe and cached.
+      const std::string cache =
+          o.cache_dir.empty() ? (dir / "foundation_cache").string() : o.cache_dir;
+      const PreparedFoundationFile pf =
+          ensure_prepared_foundation(sc, cache, specimen_log, threads);
+      const std::string& file = pf.path;
+      read_checkpoint(world, file);
+      pr.foundation = pf.result;
+      pr.foundation.from_cache = !pf.made_now;
+      world.set_local_damping(ts.local_damping);
+      say(fmt::format("prepared foundation {} ({}): {} particles, porosity by thirds {:.4f} / "
+                      "{:.4f} / {:.4f}",
+                      file, pr.foundation.from_cache ? "from the cache" : "new",
+                      pr.foundation.particles, pr.foundation.layer_porosity[0],
+                      pr.foundation.layer_porosity[1], pr.foundation.layer_porosity[2]));
+    } else {
+      build_foundation(world, sc, geometry, o.cache_dir, 1.0, pr.foundation, specimen_log, threads);
     }
-    const BuiltSpecimen built = build_specimen(spec, world, specimen_log, threads);
-    pr.foundation.brick_file = cached;
-    pr.foundation.brick_particles = built.brick ? built.brick->size() : 0;
-    pr.foundation.particles = world.particles().size();
-    pr.foundation.box_top_m = geometry.height();
-    pr.foundation.porosity_before =
-        1 - particle_volume(world.particles()) / (L * B * geometry.height());
-    const long fit = calm_into_walls(world); // no body force yet
     world.set_body_field(slope_field(sc, geometry, plan.g_levels[0]));
     pr.foundation_first_step = world.step_count();
-    say(fmt::format("fitted into the chamber walls in {} calm steps", fit));
-    say(fmt::format(
-        "foundation: {} particles ({}); equilibrium at {:g} g (|g| = {:.4g} m/s^2 "
-        "at the floor)",
-        pr.foundation.particles, pr.foundation.brick_from_cache ? "brick from cache" : "new brick",
-        plan.g_levels[0], norm(world.body_field().acceleration({0.5 * L, 0.5 * B, 0}, {}))));
+    say(fmt::format("foundation: {} particles ({}); equilibrium at {:g} g (|g| = {:.4g} m/s^2 "
+                    "at the floor)",
+                    pr.foundation.particles,
+                    pr.foundation.prepared           ? "prepared"
+                    : pr.foundation.brick_from_cache ? "brick from cache"
+                                                     : "new brick",
+                    plan.g_levels[0],
+                    norm(world.body_field().acceleration({0.5 * L, 0.5 * B, 0}, {}))));
   }
 
   // ---------------------------------------------------- cycling helpers
@@ -312,19 +239,23 @@ SlopeTrialResult run_slope_trial(const SlopeScenario& sc, const SlopeTrialPlan& 
 
   // ---------------------------------------------------------- phase 0
   if (pr.phase == 0) {
-    const double L = geometry.length();
+    const double L = geometry.length(), B = geometry.breadth();
+    const double d50 = median_diameter(world.particles());
+    const Vec3 floor_centre{0.5 * L, 0.5 * B, 0.0};
     for (;;) {
       const long done = world.step_count() - pr.foundation_first_step;
       if (done >= ts.foundation_max_steps) break;
       // Checks at multiples of `chunk` steps, also after a resume mid-chunk.
       advance(std::min(chunk - done % chunk, ts.foundation_max_steps - done));
       const double ratio = world.mean_unbalanced_force_ratio();
+      const double kinetic = kinetic_energy_ratio(world, floor_centre, d50);
       if (seconds_since(last_progress) >= o.progress_interval_s)
-        say(fmt::format("foundation: step {}, ratio {:.3g} (target {:.3g}), {:.3g} "
-                        "particle-steps/s",
+        say(fmt::format("foundation: step {}, ratio {:.3g} (target {:.3g}), kinetic {:.3g} "
+                        "(target {:.3g}), {:.3g} particle-steps/s",
                         world.step_count() - pr.foundation_first_step, ratio, ts.equilibrium_ratio,
-                        rate()));
-      if (ratio < ts.equilibrium_ratio) {
+                        kinetic, ts.rest_kinetic_ratio, rate()));
+      // At rest: balanced forces and little motion.
+      if (ratio < ts.equilibrium_ratio && kinetic < ts.rest_kinetic_ratio) {
         pr.foundation.converged = true;
         break;
       }
@@ -333,15 +264,20 @@ SlopeTrialResult run_slope_trial(const SlopeScenario& sc, const SlopeTrialPlan& 
     FoundationResult& f = pr.foundation;
     f.steps = world.step_count() - pr.foundation_first_step;
     f.ratio = world.mean_unbalanced_force_ratio();
-    const double d50 = median_diameter(world.particles());
-    std::tie(f.surface_min_m, f.surface_mean_m) = surface_heights(world.particles(), L, d50);
-    f.porosity_after =
-        1 - particle_volume(world.particles()) / (L * geometry.breadth() * f.surface_mean_m);
-    say(fmt::format("foundation {} in {} steps (ratio {:.3g}); surface {:.3f} mm (lowest "
-                    "{:.3f} mm) against the crest at {:.3f} mm; porosity {:.4f} -> {:.4f}",
-                    f.converged ? "at equilibrium" : "NOT at equilibrium (step limit)", f.steps,
-                    f.ratio, 1e3 * f.surface_mean_m, 1e3 * f.surface_min_m, 1e3 * geometry.height(),
-                    f.porosity_before, f.porosity_after));
+    f.kinetic_ratio = kinetic_energy_ratio(world, floor_centre, d50);
+    f.coordination_number = world.measure().coordination_number;
+    f.particles = world.particles().size();
+    std::tie(f.surface_min_m, f.surface_mean_m) = foundation_surface(world.particles(), L, d50);
+    double solid = 0;
+    for (double r : world.particles().radius) solid += 4.0 / 3.0 * std::numbers::pi * r * r * r;
+    f.porosity_after = 1 - solid / (L * B * f.surface_mean_m);
+    say(fmt::format("foundation {} in {} steps (ratio {:.3g}, kinetic {:.3g}); surface {:.3f} mm "
+                    "(lowest {:.3f} mm) against the crest at {:.3f} mm; porosity {:.4f} -> {:.4f}; "
+                    "coordination {:.2f}",
+                    f.converged ? "at rest" : "NOT at rest (step limit)", f.steps, f.ratio,
+                    f.kinetic_ratio, 1e3 * f.surface_mean_m, 1e3 * f.surface_min_m,
+                    1e3 * geometry.height(), f.porosity_before, f.porosity_after,
+                    f.coordination_number));
     if (f.surface_min_m < geometry.height() - d50)
       say(fmt::format("warning: the settled foundation's surface ({:.3f} mm at its lowest) is "
                       "below the crest ({:.3f} mm): the cut leaves the crest lower than "
@@ -391,6 +327,26 @@ SlopeTrialResult run_slope_trial(const SlopeScenario& sc, const SlopeTrialPlan& 
   for (const auto& [t, f] : pr.vtk_frames) pvd.add(t, f);
   SideViewWindow window{-0.02 * geometry.length(), 1.02 * geometry.length(),
                         -0.03 * geometry.height(), 1.08 * geometry.height()};
+  // The limit-equilibrium circle at the level's g (drawn on every picture).
+  std::optional<std::pair<double, LeSearchResult>> le_circle;
+  auto limit_equilibrium_line = [&](double g_level) -> std::optional<SideViewPolyline> {
+    if (!sc.limit_equilibrium.enabled) return std::nullopt;
+    if (!le_circle || le_circle->first != g_level) {
+      const double rho = limit_equilibrium_bulk_density(sc, &pr.foundation);
+      le_circle.emplace(g_level, slope_critical_circle(sc, geometry, rho, g_level));
+    }
+    const LeSearchResult& c = le_circle->second;
+    if (c.slip_surface.empty()) return std::nullopt;
+    SideViewPolyline line;
+    for (const auto& [x, z] : c.slip_surface) {
+      line.x.push_back(x);
+      line.z.push_back(z);
+    }
+    line.colour = {0.1, 0.3, 0.9};
+    line.label =
+        fmt::format("limit equilibrium (Bishop): FS {:.2f} at {:g} g", c.factor_of_safety, g_level);
+    return line;
+  };
   auto write_frame = [&](double g_level) {
     const ParticleStore& P = world.particles();
     SideViewInput in;
@@ -418,6 +374,7 @@ SlopeTrialResult run_slope_trial(const SlopeScenario& sc, const SlopeTrialPlan& 
       slip.label = "detected slip surface";
       in.extra_lines.push_back(slip);
     }
+    if (auto le = limit_equilibrium_line(g_level)) in.extra_lines.push_back(*le);
     const double t = world.time() - pr.level_t0;
     std::string state;
     if (monitor) state = std::string(to_string(monitor->state()));
@@ -569,7 +526,7 @@ json to_json(const SlopeTrialResult& r) {
     levels.push_back(j);
   }
   const LevelResult* f = r.first_failure();
-  return {{"foundation", foundation_json(r.foundation)},
+  return {{"foundation", to_json(r.foundation)},
           {"excavated", r.excavated},
           {"slope_particles", r.slope_particles},
           {"levels", levels},

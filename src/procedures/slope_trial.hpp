@@ -2,9 +2,12 @@
 // DESIGN.md "Procedures"; docs/slope.md "Trial"):
 //
 //   foundation  the specimen (a brick, cached by recipe, tiled into the
-//               slope's box) inside the chamber walls, brought to equilibrium
-//               under the field of the first g-level (mean unbalanced-force
-//               ratio below trial.equilibrium_ratio);
+//               slope's box) inside the chamber walls, or with [preparation]
+//               the prepared foundation from the cache (procedures/
+//               foundation.hpp), brought to rest under the field of the
+//               first g-level (mean unbalanced-force ratio below
+//               trial.equilibrium_ratio, kinetic energy below
+//               trial.rest_kinetic_ratio);
 //   cut         the excavation deleted (centre based); F0 graded with height
 //               when [moisture] is given; new contacts from now on get
 //               trial.after_cut (mu_r = 0, F0 = 0); displacements reset;
@@ -28,6 +31,7 @@
 #include "io/slope_config.hpp"
 #include "io/specimen_config.hpp"
 #include "procedures/failure.hpp"
+#include "procedures/foundation.hpp"
 #include "procedures/slope_geometry.hpp"
 
 #include <functional>
@@ -44,19 +48,6 @@ struct BodyField;
 struct SlopeTrialPlan {
   std::vector<double> g_levels; // one level: a trial; several: a stepped schedule
   int max_slides = 1;           // schedule: stop after this many failed levels
-};
-
-struct FoundationResult {
-  std::size_t particles = 0; // after building (the paper: 47,070)
-  long steps = 0;
-  double ratio = 0;       // mean unbalanced-force ratio at the end [-]
-  bool converged = false; // ratio below trial.equilibrium_ratio within the step limit
-  double box_top_m = 0;   // the region's top (the crest height) [m, DEM]
-  double surface_min_m = 0, surface_mean_m = 0;   // settled surface, columns of 2 d50 [m]
-  double porosity_before = 0, porosity_after = 0; // of the soil below the surface [-]
-  std::size_t brick_particles = 0;
-  bool brick_from_cache = false;
-  std::string brick_file;
 };
 
 struct LevelResult {

@@ -90,7 +90,6 @@ max_shear_displacement_m = 0.6e-3
 strain = "length"
 ball_wall = { friction = 0.2 }
 during_shear = { attraction_force_N = 0 }
-during_consolidation = { friction = 0.1, rolling_friction = 0 }
 servo_gain_factor = 0.3
 servo_max_speed_m_per_s = 0.01
 servo_integral_time_s = 3e-4
@@ -128,13 +127,35 @@ threads = 2
   EXPECT_DOUBLE_EQ(r.ball_ball_during_shear->attraction_force_N, 0.0);
   EXPECT_DOUBLE_EQ(r.ball_ball_during_shear->friction, 0.5);
   EXPECT_EQ(r.ball_ball_during_shear->model, ContactModel::arrlinear);
-  // during_consolidation: the packing's properties; the material is kept for shearing.
+  EXPECT_FALSE(r.ball_ball_during_consolidation.has_value()); // no [preparation]
+  EXPECT_DOUBLE_EQ(r.ball_ball.friction, 0.5);
+}
+
+TEST(ShearConfig, PreparationTableDrivesTheConsolidation) {
+  const ShearScenario s = parse(scenario(R"(
+normal_stresses_Pa = [50e3]
+[preparation]
+during_compaction = { friction = 0.1, rolling_friction = 0 }
+ratio = 2e-3
+max_steps = 1234
+)"));
+  ASSERT_TRUE(s.preparation.enabled);
+  const DirectShearSpec r = s.run_spec(50e3);
+  // The packing's properties; the material is kept for shearing.
   ASSERT_TRUE(r.ball_ball_during_consolidation.has_value());
   EXPECT_DOUBLE_EQ(r.ball_ball_during_consolidation->friction, 0.1);
   EXPECT_DOUBLE_EQ(r.ball_ball_during_consolidation->rolling_friction, 0.0);
   EXPECT_DOUBLE_EQ(r.ball_ball_during_consolidation->attraction_force_N,
                    s.ball_ball.attraction_force_N);
   EXPECT_DOUBLE_EQ(r.ball_ball.friction, 0.5);
+  EXPECT_DOUBLE_EQ(r.consolidation_ratio, 2e-3);
+  EXPECT_EQ(r.consolidation_max_steps, 1234);
+  // The old key points to the new table; the [shear] ratio may not compete with it.
+  EXPECT_ERROR(scenario("normal_stresses_Pa = [40e3]\nduring_consolidation = { friction = 0.1 }\n"),
+               "[preparation]");
+  EXPECT_ERROR(scenario("normal_stresses_Pa = [40e3]\nconsolidation_ratio = 1e-3\n"
+                        "[preparation]\nduring_compaction = { friction = 0.2 }\n"),
+               "shear.consolidation_ratio");
 }
 
 TEST(ShearConfig, ResolvedTomlReadsBackTheSame) {
@@ -142,13 +163,15 @@ TEST(ShearConfig, ResolvedTomlReadsBackTheSame) {
 normal_stresses_Pa = [50e3, 100e3]
 strain = "length"
 during_shear = { attraction_force_N = 0.0, friction = 0.4 }
-during_consolidation = { friction = 0.05 }
+[preparation]
+during_compaction = { friction = 0.05 }
 )"));
   const ShearScenario b = parse(resolved_shear_toml(a));
   EXPECT_EQ(a.normal_stresses_Pa, b.normal_stresses_Pa);
   EXPECT_EQ(a.ball_ball, b.ball_ball);
   EXPECT_EQ(a.during_shear, b.during_shear);
-  EXPECT_EQ(a.during_consolidation, b.during_consolidation);
+  EXPECT_EQ(a.preparation, b.preparation);
+  EXPECT_TRUE(b.preparation.enabled);
   EXPECT_EQ(a.test.ball_wall, b.test.ball_wall);
   EXPECT_EQ(a.test.strain, b.test.strain);
   EXPECT_DOUBLE_EQ(a.test.max_shear_displacement_m, b.test.max_shear_displacement_m);
@@ -228,11 +251,17 @@ TEST(ShearConfig, WrongTypesAndRangesAreRejected) {
       scenario("normal_stresses_Pa = [40e3]\nduring_shear = { attraction_force_N = -1 }\n"),
       "shear.during_shear.attraction_force_N");
   EXPECT_ERROR(scenario("normal_stresses_Pa = [40e3]\nduring_shear = 0\n"), "shear.during_shear");
-  EXPECT_ERROR(
-      scenario("normal_stresses_Pa = [40e3]\nduring_consolidation = { friction = -0.1 }\n"),
-      "shear.during_consolidation.friction");
-  EXPECT_ERROR(scenario("normal_stresses_Pa = [40e3]\nduring_consolidation = { fiction = 0 }\n"),
+  EXPECT_ERROR(scenario("normal_stresses_Pa = [40e3]\n[preparation]\n"
+                        "during_compaction = { friction = -0.1 }\n"),
+               "preparation.during_compaction.friction");
+  EXPECT_ERROR(scenario("normal_stresses_Pa = [40e3]\n[preparation]\n"
+                        "during_compaction = { fiction = 0 }\n"),
                "did you mean \"friction\"");
+  EXPECT_ERROR(scenario("normal_stresses_Pa = [40e3]\n[preparation]\nratio = 0.1\n"),
+               "preparation.during_compaction");
+  EXPECT_ERROR(scenario("normal_stresses_Pa = [40e3]\n[preparation]\n"
+                        "during_compaction = { friction = 0.2 }\noverfill = 0.5\n"),
+               "preparation.overfill");
   EXPECT_ERROR(scenario("normal_stresses_Pa = [40e3]\nbox = { length_m = -1 }\n"),
                "shear.box.length_m");
   EXPECT_ERROR(scenario("normal_stresses_Pa = [40e3]\nbox = { plate_length_m = 1e-5 }\n"),

@@ -53,7 +53,8 @@ TEST(SlopeConfig, PaperExamplesResolveToTable1AndThePapersGeometry) {
     EXPECT_DOUBLE_EQ(s->soil().friction, 0.5);
     EXPECT_DOUBLE_EQ(s->soil().rolling_friction, 0.16);
     EXPECT_DOUBLE_EQ(s->soil_after_cut().rolling_friction, 0.0);
-    EXPECT_DOUBLE_EQ(s->soil_after_cut().attraction_force_N, 0.0);
+    // The paper's after-cut rule (section 3.3): new contacts keep F0 / s (issue 16).
+    EXPECT_DOUBLE_EQ(s->soil_after_cut().attraction_force_N, 1.2e-4 / 0.063);
     EXPECT_DOUBLE_EQ(s->walls.chamber.friction, 0.2);
     EXPECT_DOUBLE_EQ(s->trial.local_damping, 0.7);
     ASSERT_TRUE(s->specimen.region.has_value());
