@@ -607,7 +607,26 @@ int run_slope_command(const SlopeCommandOptions& opt) {
     title_extra = fmt::format(" (first slide at {:g} g)", critical["first_slide_g"].get<double>());
   if (!plotted.empty()) write_plot(sc, plotted, title_extra, out / "g_levels.png");
   md += "\nCritical g: " + (critical.is_null() ? std::string("not bracketed") : critical.dump()) +
-        "\n\nPictures: `<trial>/pictures/frame_NNNN.png`; ParaView: `<trial>/slope.pvd`; the "
+        "\n";
+  if (foundation)
+    md += fmt::format("\nPrepared foundation: {} particles (generated {}, trimmed {}), porosity "
+                      "by thirds (bottom, middle, top) {:.4f} / {:.4f} / {:.4f}, coordination "
+                      "number {:.2f}.\n",
+                      foundation->particles, foundation->generated_particles, foundation->trimmed,
+                      foundation->layer_porosity[0], foundation->layer_porosity[1],
+                      foundation->layer_porosity[2], foundation->coordination_number);
+  if (limit_equilibrium.is_object())
+    md += fmt::format(
+        "\nLimit equilibrium (Bishop's simplified method, circular slips): critical "
+        "g {:.1f}{} with c = {:.3g} kPa, phi = {:.3g} deg, bulk density {:.0f} "
+        "kg/m^3{}.\n",
+        limit_equilibrium["critical_g"].get<double>(),
+        limit_equilibrium["bracketed"].get<bool>() ? "" : " (not bracketed)",
+        1e-3 * limit_equilibrium["cohesion_Pa"].get<double>(),
+        limit_equilibrium["friction_angle_deg"].get<double>(),
+        limit_equilibrium["bulk_density_kg_m3"].get<double>(),
+        sc.limit_equilibrium.source.empty() ? "" : " (" + sc.limit_equilibrium.source + ")");
+  md += "\nPictures: `<trial>/pictures/frame_NNNN.png`; ParaView: `<trial>/slope.pvd`; the "
         "g-level plot: `g_levels.png`.\n";
 
   json summary;

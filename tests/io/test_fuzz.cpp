@@ -134,7 +134,11 @@ const std::set<std::string>& known_keys() {
       "consecutive_checks", "failure_displacement_d50", "growth_tolerance", "slip_surface_bin_d50",
       "start_share", "bench_share", "g_levels", "search", "schedule", "jobs", "stable_g",
       "failed_g", "tolerance_g", "step_g", "max_g", "max_slides", "colour_range_m",
-      "frame_interval_steps", "vtk", "picture_width_px"};
+      "frame_interval_steps", "vtk", "picture_width_px",
+      // [preparation] (shear and slope), [limit_equilibrium], [trial] rest_kinetic_ratio
+      "preparation", "during_compaction", "compaction_g_level", "compaction_stress_Pa", "overfill",
+      "limit_equilibrium", "cohesion_Pa", "friction_angle_deg", "bulk_density_kg_m3", "source",
+      "rest_kinetic_ratio"};
   return keys;
 }
 
