@@ -14,7 +14,7 @@ CENTRIDEM   := ./$(BUILD_DIR)/centridem
 SETUP_STAMP := $(BUILD_DIR)/.setup-done
 
 # The demo: a scaled-down benched slope in the centrifuge, one stable and one failing trial
-# (examples/demo_slope.toml; about a minute on 2 cores).
+# (examples/demo_slope.toml; a few minutes on 2 cores).
 DEMO_OUT := runs/demo
 DEMO_CMD  = $(CENTRIDEM) slope examples/demo_slope.toml --out $(DEMO_OUT) --cache runs/cache
 

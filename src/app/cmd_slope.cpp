@@ -638,6 +638,7 @@ int run_slope_command(const SlopeCommandOptions& opt) {
   summary["trials"] = rows;
   summary["critical_g"] = critical;
   summary["limit_equilibrium"] = limit_equilibrium;
+  summary["prepared_foundation"] = foundation ? to_json(*foundation) : json(nullptr);
   summary["wall_seconds_this_process"] = seconds_since(t0);
   replace_text_file((out / "summary.json").string(), summary.dump(2) + "\n");
   replace_text_file((out / "summary.md").string(), md);
