@@ -225,12 +225,6 @@ DirectShearResult run_direct_shear(World& w, const DirectShearSpec& s,
                             {s.box.length_m, s.box.width_m, w.walls()[top].point.z}})
         .porosity;
   };
-  // Every ball-ball contact, and the defaults for new ones, get `c`.
-  auto assign_ball_ball = [&](const ContactProperties& c) {
-    w.set_ball_ball_defaults(c);
-    w.modify_ball_ball_contacts([](std::size_t, std::size_t) { return true; },
-                                [&](ContactProperties& p) { p = c; });
-  };
   DirectShearResult& r = pr.r;
 
   if (!resume) {
@@ -243,7 +237,8 @@ DirectShearResult run_direct_shear(World& w, const DirectShearSpec& s,
     servo.integral_time_s = s.servo_integral_time_s;
     w.set_wall_servo(bottom, servo);
     r.target_normal_stress_Pa = s.normal_stress_Pa;
-    if (s.ball_ball_during_consolidation) assign_ball_ball(*s.ball_ball_during_consolidation);
+    if (s.ball_ball_during_consolidation)
+      assign_ball_ball_contacts(w, *s.ball_ball_during_consolidation);
     // Fit the specimen into the box: centres inside the box leave spheres
     // poking through the walls; push them in with calm cycles (velocities
     // zeroed, PFC `calm`) under a tolerant overlap guard.
@@ -283,7 +278,7 @@ DirectShearResult run_direct_shear(World& w, const DirectShearSpec& s,
         // servo's integral carried the packing's creep; it starts again from
         // zero, and the specimen settles with its own properties before
         // shearing (else the stiffer packing meets a servo still pushing).
-        assign_ball_ball(s.ball_ball);
+        assign_ball_ball_contacts(w, s.ball_ball);
         WallServo servo = w.walls()[bottom].servo;
         servo.error_integral_N_s = 0;
         w.set_wall_servo(bottom, servo);

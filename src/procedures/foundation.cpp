@@ -29,12 +29,6 @@ using json = nlohmann::json;
 
 namespace {
 
-double particle_volume(const ParticleStore& P) {
-  double v = 0;
-  for (double r : P.radius) v += 4.0 / 3.0 * std::numbers::pi * r * r * r;
-  return v;
-}
-
 // Volume of a sphere (centre height zc, radius r) between heights z0 < z1
 // [m^3]: the integral of pi (r^2 - (z - zc)^2) over the overlap.
 double sphere_slab_volume(double zc, double r, double z0, double z1) {
@@ -134,12 +128,14 @@ std::array<double, 3> layer_porosities(const World& w, const Box& box, double ma
 }
 
 double kinetic_energy_ratio(const World& w, const Vec3& at, double d50) {
-  const Energy e = w.energy();
-  double mass = 0;
-  for (double m : w.particles().mass) mass += m;
-  const double g = norm(w.body_field().acceleration(at, {}));
-  const double scale = mass * g * d50;
-  return scale > 0 ? e.kinetic_J / scale : 0.0;
+  const ParticleStore& P = w.particles();
+  double kinetic = 0, mass = 0;
+  for (std::size_t i = 0; i < P.size(); ++i) {
+    kinetic += 0.5 * P.mass[i] * norm2(P.velocity[i]);
+    mass += P.mass[i];
+  }
+  const double scale = mass * norm(w.body_field().acceleration(at, {})) * d50;
+  return scale > 0 ? kinetic / scale : 0.0;
 }
 
 void build_foundation(World& world, const SlopeScenario& sc, const SlopeGeometry& geometry,
@@ -188,7 +184,7 @@ void build_foundation(World& world, const SlopeScenario& sc, const SlopeGeometry
   f.particles = world.particles().size();
   f.box_top_m = geometry.height();
   f.porosity_before =
-      1 - particle_volume(world.particles()) / (L * B * height_factor * geometry.height());
+      1 - solid_volume_m3(world.particles()) / (L * B * height_factor * geometry.height());
   const long fit = calm_into_walls(world); // no body force yet
   say(fmt::format("fitted into the chamber walls in {} calm steps", fit));
 }
@@ -202,11 +198,6 @@ void prepare_foundation(World& world, const SlopeScenario& sc, const SlopeGeomet
   const double L = geometry.length(), B = geometry.breadth(), H = geometry.height();
   const ContactProperties soil = sc.soil();
   const ContactProperties packing = apply(prep.during_compaction, soil);
-  auto assign = [&](const ContactProperties& c) {
-    world.set_ball_ball_defaults(c);
-    world.modify_ball_ball_contacts([](std::size_t, std::size_t) { return true; },
-                                    [&](ContactProperties& p) { p = c; });
-  };
   f.prepared = true;
   f.generated_particles = world.particles().size();
   f.compaction_g_level = prep.compaction_g_level;
@@ -271,10 +262,10 @@ void prepare_foundation(World& world, const SlopeScenario& sc, const SlopeGeomet
       world.particles().size(), inline_patch(prep.during_compaction), prep.compaction_g_level,
       plate ? fmt::format(" and a top plate at {:g} kPa", 1e-3 * prep.compaction_stress_Pa)
             : std::string()));
-  assign(packing);
+  assign_ball_ball_contacts(world, packing);
   const auto [compaction, compacted] = cycle_until("compaction", compacted_now);
   f.compaction_steps = compaction;
-  assign(soil);
+  assign_ball_ball_contacts(world, soil);
   if (plate) {
     WallServo s = world.walls()[*plate].servo;
     s.error_integral_N_s = 0;
@@ -289,15 +280,14 @@ void prepare_foundation(World& world, const SlopeScenario& sc, const SlopeGeomet
   if (plate) world.remove_wall("compaction_plate");
 
   // The prepared surface must stand at or above the design; trim the excess.
-  const auto [smin, smean] = foundation_surface(world.particles(), L, d50);
+  const double smin = foundation_surface(world.particles(), L, d50).first;
   f.prepared_surface_min_m = smin;
   if (smin < H) {
-    const double need = sc.preparation.overfill * (H - smin) / std::max(smean, 1e-12) + 0.05;
     throw InputError("preparation.overfill", tomlread::num(sc.preparation.overfill),
                      fmt::format("too little soil: the prepared surface stands at {:.3f} mm at "
                                  "its lowest, below the design crest at {:.3f} mm; raise it to "
                                  "about {:.2f}",
-                                 1e3 * smin, 1e3 * H, sc.preparation.overfill + need));
+                                 1e3 * smin, 1e3 * H, sc.preparation.overfill * H / smin + 0.05));
   }
   const ParticleStore& P = world.particles();
   f.trimmed = world.remove_particles([&](std::size_t i) { return P.position[i].z > H; });

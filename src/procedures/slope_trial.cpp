@@ -268,9 +268,7 @@ SlopeTrialResult run_slope_trial(const SlopeScenario& sc, const SlopeTrialPlan& 
     f.coordination_number = world.measure().coordination_number;
     f.particles = world.particles().size();
     std::tie(f.surface_min_m, f.surface_mean_m) = foundation_surface(world.particles(), L, d50);
-    double solid = 0;
-    for (double r : world.particles().radius) solid += 4.0 / 3.0 * std::numbers::pi * r * r * r;
-    f.porosity_after = 1 - solid / (L * B * f.surface_mean_m);
+    f.porosity_after = 1 - solid_volume_m3(world.particles()) / (L * B * f.surface_mean_m);
     say(fmt::format("foundation {} in {} steps (ratio {:.3g}, kinetic {:.3g}); surface {:.3f} mm "
                     "(lowest {:.3f} mm) against the crest at {:.3f} mm; porosity {:.4f} -> {:.4f}; "
                     "coordination {:.2f}",

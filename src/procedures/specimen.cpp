@@ -754,6 +754,18 @@ void write_specimen_outputs(const World& world, const BuiltSpecimen& built,
   if (built.brick) write_brick(*built.brick, (d / "brick.json").string());
 }
 
+void assign_ball_ball_contacts(World& w, const ContactProperties& c) {
+  w.set_ball_ball_defaults(c);
+  w.modify_ball_ball_contacts([](std::size_t, std::size_t) { return true; },
+                              [&](ContactProperties& p) { p = c; });
+}
+
+double solid_volume_m3(const ParticleStore& P) {
+  double v = 0;
+  for (double r : P.radius) v += 4.0 / 3.0 * std::numbers::pi * r * r * r;
+  return v;
+}
+
 long calm_into_walls(World& w) {
   const double guard = w.settings().max_overlap_fraction;
   w.set_max_overlap_fraction(std::max(guard, 3.0));

@@ -182,6 +182,14 @@ BuiltSpecimen build_specimen(const SpecimenSpec& spec, World& world, const Speci
 // (at most 20,000 steps). Returns the steps taken.
 long calm_into_walls(World& world);
 
+// Every existing ball-ball contact and the defaults for new ones become `c`
+// (the preparation's switch from the compaction properties to the material,
+// and back; PFC: the contact model assignment table plus a property change).
+void assign_ball_ball_contacts(World& world, const ContactProperties& c);
+
+// Total solid volume of the particles, sum of 4/3 pi r^3 [m^3].
+double solid_volume_m3(const ParticleStore& particles);
+
 // Writes the specimen's files into `dir` (created): specimen.vtu (ParaView),
 // specimen.xyzr (x y z r per line, SI), specimen.json (the report),
 // specimen.toml (the resolved [specimen] table) and brick.json (when a
