@@ -1,9 +1,11 @@
 // centridem: command line. Exit codes: 0 success, 2 bad input, 3 the run went
-// unstable, 1 any other failure.
+// unstable, 128 + signal stopped by SIGINT / SIGTERM after a checkpoint, 1 any
+// other failure.
 #include "app/cmd_generate.hpp"
 #include "app/cmd_shear.hpp"
 #include "app/cmd_slope.hpp"
 #include "core/errors.hpp"
+#include "core/interrupt.hpp"
 #include "io/scenario.hpp"
 #include "procedures/bench.hpp"
 #include "procedures/staged_run.hpp"
@@ -32,13 +34,25 @@ int run_bench_command(const BenchOptions& o) {
 struct RunCommand {
   std::string scenario;
   std::string out;
-  int threads = -1; // -1: as the scenario says
+  std::string resume; // run folder to continue
+  int threads = -1;   // -1: as the scenario says
 };
 
 int run_run_command(const RunCommand& c) {
+  install_stop_handlers();
   RunOptions o;
   o.output_dir = c.out;
   if (c.threads >= 0) o.threads = c.threads;
+  if (!c.resume.empty()) {
+    if (!c.scenario.empty())
+      throw InputError("scenario", c.scenario,
+                       "not with --resume: the run continues with the scenario it was started "
+                       "with (scenario.resolved.toml in its folder)");
+    resume_run(c.resume, o); // refuses --out and --threads, naming them
+    return 0;
+  }
+  if (c.scenario.empty())
+    throw InputError("scenario", "(missing)", "a scenario file, or --resume RUN_DIR");
   run_scenario(load_scenario(c.scenario), o);
   return 0;
 }
@@ -71,9 +85,12 @@ int main(int argc, char** argv) {
   auto* cmd_run = app.add_subcommand(
       "run", "run a staged scenario: particles, walls, gravity, stages of cycling "
              "(docs/scenario.md)");
-  cmd_run->add_option("scenario", run.scenario, "scenario file (TOML)")->required();
+  cmd_run->add_option("scenario", run.scenario, "scenario file (TOML)");
   cmd_run->add_option("--out", run.out,
                       "run folder (default: simulation.output_dir, else runs/<scenario stem>)");
+  cmd_run->add_option("--resume", run.resume,
+                      "continue the run in this folder from its last checkpoint (no scenario, "
+                      "--out or --threads with it)");
   cmd_run
       ->add_option("--threads", run.threads,
                    "OpenMP threads, overrides simulation.threads (0 = the OpenMP default)")
@@ -95,6 +112,10 @@ int main(int argc, char** argv) {
   } catch (const InstabilityError& e) {
     fmt::print(stderr, "centridem: unstable: {}\n", e.what());
     return 3;
+  } catch (const Interrupted& e) {
+    // The message ends with how to continue (`centridem run --resume DIR`).
+    fmt::print(stderr, "centridem: interrupted: {}\n", e.what());
+    return 128 + e.signal();
   } catch (const std::exception& e) {
     fmt::print(stderr, "centridem: error: {}\n", e.what());
     return 1;

@@ -770,34 +770,38 @@ void World::integrate() {
   double max_move2 = 0.0;
   std::uint32_t bad = UINT32_MAX;
 
-#pragma omp parallel for schedule(static) num_threads(thread_count(settings_, n))                  \
-    reduction(max                                                                                  \
-              : max_move2) reduction(min                                                           \
-                                     : bad)
-  for (std::size_t i = 0; i < n; ++i) {
-    // Own side was summed by compute_contacts; add the forces from the
-    // contacts in which i is the second end (zero for non-touching entries).
-    Vec3 f = P.force[i];
-    Vec3 mo = P.moment[i];
-    for (std::uint32_t k = bb_.incoming_offset[i]; k < bb_.incoming_offset[i + 1]; ++k) {
-      const std::uint32_t e = bb_.incoming[k];
-      f += bb_.force_on_2[e];
-      mo += bb_.moment_on_2[e];
+  int team = 1;
+#pragma omp parallel num_threads(thread_count(settings_, n))
+  {
+#pragma omp single nowait
+    team = omp_get_num_threads();
+#pragma omp for schedule(static) reduction(max : max_move2) reduction(min : bad)
+    for (std::size_t i = 0; i < n; ++i) {
+      // Own side was summed by compute_contacts; add the forces from the
+      // contacts in which i is the second end (zero for non-touching entries).
+      Vec3 f = P.force[i];
+      Vec3 mo = P.moment[i];
+      for (std::uint32_t k = bb_.incoming_offset[i]; k < bb_.incoming_offset[i + 1]; ++k) {
+        const std::uint32_t e = bb_.incoming[k];
+        f += bb_.force_on_2[e];
+        mo += bb_.moment_on_2[e];
+      }
+      P.force[i] = f;
+      P.moment[i] = mo;
+      // Central differences (PFC): v(t+dt/2) = v(t-dt/2) + (F + Fd)/m dt.
+      if (!(P.flags[i] & fix_translation))
+        P.velocity[i] += (f + local_damping_force(f, P.velocity[i], alpha)) * (dt / P.mass[i]);
+      if (!(P.flags[i] & fix_rotation))
+        P.spin[i] += (mo + local_damping_force(mo, P.spin[i], alpha)) * (dt / P.inertia[i]);
+      const Vec3 dx = P.velocity[i] * dt;
+      P.position[i] += dx;
+      P.displacement[i] += dx;
+      if (!is_finite(P.position[i]) || !is_finite(P.spin[i]))
+        bad = std::min(bad, static_cast<std::uint32_t>(i));
+      max_move2 = std::max(max_move2, norm2(P.position[i] - position_at_build_[i]));
     }
-    P.force[i] = f;
-    P.moment[i] = mo;
-    // Central differences (PFC): v(t+dt/2) = v(t-dt/2) + (F + Fd)/m dt.
-    if (!(P.flags[i] & fix_translation))
-      P.velocity[i] += (f + local_damping_force(f, P.velocity[i], alpha)) * (dt / P.mass[i]);
-    if (!(P.flags[i] & fix_rotation))
-      P.spin[i] += (mo + local_damping_force(mo, P.spin[i], alpha)) * (dt / P.inertia[i]);
-    const Vec3 dx = P.velocity[i] * dt;
-    P.position[i] += dx;
-    P.displacement[i] += dx;
-    if (!is_finite(P.position[i]) || !is_finite(P.spin[i]))
-      bad = std::min(bad, static_cast<std::uint32_t>(i));
-    max_move2 = std::max(max_move2, norm2(P.position[i] - position_at_build_[i]));
   }
+  threads_used_ = team;
 
   if (bad != UINT32_MAX)
     throw InstabilityError(fmt::format(
@@ -939,6 +943,19 @@ double World::critical_timestep() {
 void World::update_timestep(bool force_estimate) {
   if (settings_.timestep_s > 0) {
     dt_ = settings_.timestep_s;
+    // Contacts may stiffen during a run (new contacts, a denser packing):
+    // check the fixed timestep whenever the automatic one would be estimated.
+    if (force_estimate || step_ % settings_.timestep_update_interval == 0) {
+      const double crit = critical_timestep();
+      if (dt_ > crit)
+        throw InstabilityError(fmt::format(
+            "fixed timestep {:.4g} s is above the critical timestep {:.4g} s estimated at step "
+            "{} (t = {:.6g} s) from the current contacts: they stiffened during the run (more "
+            "contacts per particle, or stiffer ones). Likely cause: simulation.timestep_s "
+            "chosen for a looser state; use at most {:.4g} s (safety factor {}) or \"auto\"",
+            dt_, crit, step_, time_, settings_.timestep_safety_factor * crit,
+            settings_.timestep_safety_factor));
+    }
     return;
   }
   if (force_estimate || dt_target_ <= 0 || step_ % settings_.timestep_update_interval == 0) {
@@ -1067,6 +1084,20 @@ void World::restore_contacts(const std::vector<ContactRecord>& records) {
 
 // ------------------------------------------------------------ measurements --
 
+// The magnitudes of every force applied to particle i: body, applied,
+// contacts (PFC `mech.ratio.avg`'s denominator) [N].
+double World::applied_force_magnitude(std::size_t i) const {
+  double a = norm(p_.mass[i] * field_.acceleration(p_.position[i], p_.velocity[i])) +
+             norm(p_.applied_force[i]);
+  for (std::uint32_t e = bb_.row_offset[i]; e < bb_.row_offset[i + 1]; ++e)
+    if (bb_.properties[e] != kNoContact) a += norm(bb_.force_on_2[e]);
+  for (std::uint32_t k = bb_.incoming_offset[i]; k < bb_.incoming_offset[i + 1]; ++k)
+    if (bb_.properties[bb_.incoming[k]] != kNoContact) a += norm(bb_.force_on_2[bb_.incoming[k]]);
+  for (std::uint32_t e = bw_.row_offset[i]; e < bw_.row_offset[i + 1]; ++e)
+    if (bw_.properties[e] != kNoContact) a += norm(bw_.force_on_wall[e]);
+  return a;
+}
+
 double World::mean_unbalanced_force_ratio() const {
   const std::size_t n = p_.size();
   if (n == 0 || bb_.row_offset.size() != n + 1) return 0.0;
@@ -1077,16 +1108,20 @@ double World::mean_unbalanced_force_ratio() const {
     reduction(+ : unbalanced, applied)
   for (std::size_t i = 0; i < n; ++i) {
     if (p_.flags[i] & fix_translation) continue;
-    double a = norm(p_.mass[i] * field_.acceleration(p_.position[i], p_.velocity[i])) +
-               norm(p_.applied_force[i]);
-    for (std::uint32_t e = bb_.row_offset[i]; e < bb_.row_offset[i + 1]; ++e)
-      if (bb_.properties[e] != kNoContact) a += norm(bb_.force_on_2[e]);
-    for (std::uint32_t k = bb_.incoming_offset[i]; k < bb_.incoming_offset[i + 1]; ++k)
-      if (bb_.properties[bb_.incoming[k]] != kNoContact) a += norm(bb_.force_on_2[bb_.incoming[k]]);
-    for (std::uint32_t e = bw_.row_offset[i]; e < bw_.row_offset[i + 1]; ++e)
-      if (bw_.properties[e] != kNoContact) a += norm(bw_.force_on_wall[e]);
     unbalanced += norm(p_.force[i]);
-    applied += a;
+    applied += applied_force_magnitude(i);
+  }
+  return applied > 0 ? unbalanced / applied : 0.0;
+}
+
+double World::mean_unbalanced_force_ratio(const std::function<bool(std::size_t)>& include) const {
+  const std::size_t n = p_.size();
+  if (n == 0 || bb_.row_offset.size() != n + 1) return 0.0;
+  double unbalanced = 0.0, applied = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    if ((p_.flags[i] & fix_translation) || !include(i)) continue;
+    unbalanced += norm(p_.force[i]);
+    applied += applied_force_magnitude(i);
   }
   return applied > 0 ? unbalanced / applied : 0.0;
 }
@@ -1143,6 +1178,7 @@ Energy World::energy() const {
     en.strain_normal_J += 0.5 * k.kn * ov * ov;
     if (k.ks > 0) en.strain_shear_J += norm2(s.shear_force) / (2.0 * k.ks);
     if (k.kr > 0) en.strain_rolling_J += norm2(s.rolling_moment) / (2.0 * k.kr);
+    en.attraction_J += attraction_potential(cp, g.overlap_m);
   };
   const auto& r = p_.radius;
   for (std::size_t i = 0; i < n; ++i) {

@@ -69,8 +69,10 @@ struct Energy {
   double strain_normal_J = 0;  // 1/2 kn delta^2 over active contacts
   double strain_shear_J = 0;   // |Fs|^2 / (2 ks)
   double strain_rolling_J = 0; // |Mr|^2 / (2 kr)
+  double attraction_J = 0;     // potential of the attraction (arrlinear), <= 0
   double total() const {
-    return kinetic_J + rotational_J + strain_normal_J + strain_shear_J + strain_rolling_J;
+    return kinetic_J + rotational_J + strain_normal_J + strain_shear_J + strain_rolling_J +
+           attraction_J;
   }
 };
 
@@ -180,11 +182,18 @@ public:
   Measurements measure() const;
   Energy energy() const;
   double mean_unbalanced_force_ratio() const;
+  // The same ratio over the particles for which include(i) is true (a part of
+  // the model: the slope above its foundation, say), summed serially in index
+  // order, so it does not depend on the thread count; 0 when none [-].
+  double mean_unbalanced_force_ratio(const std::function<bool(std::size_t)>& include) const;
   RegionMeasurement measure_region(const Box& box) const;
   std::vector<ContactView> ball_ball_contacts() const;
   std::size_t bytes_per_particle() const; // all engine storage / particles
   std::size_t neighbour_entries() const { return bb_.entries(); }
   long neighbour_rebuilds() const { return rebuilds_; }
+  // OpenMP threads that ran the last step's integration (1 below 2,000
+  // particles; see thread_count in world.cpp).
+  int threads_used() const { return threads_used_; }
 
   // Forces a rebuild of the neighbour lists (and re-sort) before the next step.
   void request_rebuild() { dirty_ = true; }
@@ -225,6 +234,7 @@ public:
   }
 
 private:
+  double applied_force_magnitude(std::size_t i) const; // the ratio's denominator term [N]
   void rebuild(std::vector<std::uint32_t> new_to_old);
   void rebuild_sorted();
   void ensure_built();
@@ -259,6 +269,7 @@ private:
   double dt_ = 0;
   double dt_target_ = 0;
   long rebuilds_ = 0;
+  int threads_used_ = 1;
   bool dirty_ = true;
   double cutoff_extra_ = 0; // largest attraction range among property sets [m]
   PeriodicBox periodic_;

@@ -14,9 +14,9 @@ RunLog::~RunLog() {
   if (file_) std::fclose(file_);
 }
 
-void RunLog::open(const std::string& path) {
+void RunLog::open(const std::string& path, bool append) {
   if (file_) std::fclose(file_);
-  file_ = std::fopen(path.c_str(), "w");
+  file_ = std::fopen(path.c_str(), append ? "a" : "w");
   if (!file_)
     throw std::runtime_error(
         fmt::format("cannot write the log {}: {}", path, std::strerror(errno)));

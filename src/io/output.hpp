@@ -17,8 +17,9 @@ public:
   RunLog(const RunLog&) = delete;
   RunLog& operator=(const RunLog&) = delete;
 
-  // Opens (truncates) the log file; lines printed before are written to it.
-  void open(const std::string& path);
+  // Opens the log file, truncated (or appended to: a resumed run's log);
+  // lines printed before are written to it.
+  void open(const std::string& path, bool append = false);
   void info(std::string_view line);
   void progress(std::string_view line);
   void warn(std::string_view line);

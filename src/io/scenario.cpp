@@ -155,6 +155,8 @@ const std::map<std::string_view, std::string_view>& key_homes() {
       {"timestep_s", "[simulation]"},
       {"threads", "[simulation]"},
       {"output_dir", "[simulation]"},
+      {"checkpoint_interval_min", "[simulation]"},
+      {"checkpoint_interval_steps", "[simulation]"},
       {"density_kg_m3", "[particles]"},
       {"file", "[particles]"},
       {"g_level", "[gravity]"},
@@ -249,10 +251,18 @@ std::string read_name(const toml::table& t, const std::string& path, const char*
 
 const Keys kTopKeys = {"description", "simulation", "particles", "contact",
                        "walls",       "gravity",    "stages",    "specimen"};
-const Keys kSimulationKeys = {
-    "timestep_s",    "timestep_safety_factor", "timestep_growth_limit", "timestep_update_interval",
-    "local_damping", "neighbour_skin_m",       "max_overlap_fraction",  "threads",
-    "output_dir",    "progress_interval_s"};
+const Keys kSimulationKeys = {"timestep_s",
+                              "timestep_safety_factor",
+                              "timestep_growth_limit",
+                              "timestep_update_interval",
+                              "local_damping",
+                              "neighbour_skin_m",
+                              "max_overlap_fraction",
+                              "threads",
+                              "output_dir",
+                              "progress_interval_s",
+                              "checkpoint_interval_min",
+                              "checkpoint_interval_steps"};
 const Keys kParticleKeys = {"file", "density_kg_m3", "group"};
 const Keys kContactSectionKeys = {"ball_ball", "ball_wall"};
 const Keys kContactKeys = {"model",
@@ -454,6 +464,13 @@ SimulationSpec read_simulation(const toml::table* t, const std::string& default_
   }
   s.progress_interval_s = number(*t, p, "progress_interval_s", s.progress_interval_s, non_negative,
                                  "seconds between progress lines: >= 0 [s]");
+  s.checkpoint_interval_min =
+      number(*t, p, "checkpoint_interval_min", s.checkpoint_interval_min, non_negative,
+             "wall-clock minutes between checkpoints: >= 0 [min] (0 = not by time)");
+  if (auto v = opt_integer(
+          *t, p, "checkpoint_interval_steps", [](long x) { return x >= 0; },
+          "steps between checkpoints: >= 0 (0 = not by steps)"))
+    s.checkpoint_interval_steps = *v;
   validate(w);
   return s;
 }
@@ -908,6 +925,10 @@ std::string resolved_toml(const Scenario& s) {
   o += fmt::format("threads = {}  # 0 = the OpenMP default\n", w.threads);
   o += fmt::format("output_dir = {}\n", quote(s.simulation.output_dir));
   o += fmt::format("progress_interval_s = {}\n", num(s.simulation.progress_interval_s));
+  o += fmt::format("checkpoint_interval_min = {}  # 0 = not by time\n",
+                   num(s.simulation.checkpoint_interval_min));
+  o += fmt::format("checkpoint_interval_steps = {}  # 0 = not by steps\n",
+                   s.simulation.checkpoint_interval_steps);
 
   o += "\n[particles]\n";
   std::string abs = s.particles.path;

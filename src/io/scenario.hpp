@@ -69,9 +69,11 @@ ContactPatch read_contact_patch(const toml::node& node, const std::string& path)
 std::string inline_patch(const ContactPatch& patch);
 
 struct SimulationSpec {
-  WorldSettings world;               // timestep_s 0 = "auto"
-  std::string output_dir;            // run folder (relative: to the working directory)
-  double progress_interval_s = 10.0; // seconds between progress lines on stderr
+  WorldSettings world;                 // timestep_s 0 = "auto"
+  std::string output_dir;              // run folder (relative: to the working directory)
+  double progress_interval_s = 10.0;   // seconds between progress lines on stderr
+  double checkpoint_interval_min = 10; // wall-clock minutes between checkpoints (0 = not by time)
+  long checkpoint_interval_steps = 0;  // steps between checkpoints (0 = not by steps)
 };
 
 struct ParticlesSpec {

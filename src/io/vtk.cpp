@@ -188,6 +188,11 @@ void PvdSeries::add(double time_s, const std::string& file) {
   write();
 }
 
+void PvdSeries::assign(std::vector<std::pair<double, std::string>> entries) {
+  entries_ = std::move(entries);
+  write();
+}
+
 void PvdSeries::write() const {
   std::string s = kHeader;
   s += "<VTKFile type=\"Collection\" version=\"1.0\" byte_order=\"LittleEndian\">\n";

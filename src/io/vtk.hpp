@@ -33,6 +33,9 @@ public:
   explicit PvdSeries(std::string path) : path_(std::move(path)) {}
   // `file` is relative to the .pvd's folder.
   void add(double time_s, const std::string& file);
+  // Replaces the entries (a resumed run's series so far) and writes the file.
+  void assign(std::vector<std::pair<double, std::string>> entries);
+  const std::vector<std::pair<double, std::string>>& entries() const { return entries_; }
   std::size_t size() const { return entries_.size(); }
   const std::string& path() const { return path_; }
 

@@ -101,6 +101,19 @@ inline double attraction_force(const ContactProperties& p, double overlap_m) {
   return p.attraction_force_N * (1.0 - gap / p.attraction_range_m);
 }
 
+// Potential energy of the attraction, U(d) = -integral_{-D0}^{d} F_att(x) dx,
+// zero beyond the range, so that F_att = -dU/d(overlap) acts like a
+// potential force: -F0 (D0 + d)^2/(2 D0) in the gap (-D0 < d < 0) and
+// -F0 (D0/2 + d) while overlapping (D0 = 0: -F0 d). [J]
+inline double attraction_potential(const ContactProperties& p, double overlap_m) {
+  if (p.attraction_force_N <= 0.0) return 0.0;
+  const double F0 = p.attraction_force_N, D0 = p.attraction_range_m;
+  if (overlap_m >= 0.0) return -F0 * (0.5 * D0 + overlap_m);
+  const double gap = -overlap_m;
+  if (gap >= D0) return 0.0;
+  return -F0 * (D0 - gap) * (D0 - gap) / (2.0 * D0);
+}
+
 // Rotate a stored vector into the plane normal to n, keeping its magnitude
 // (the contact plane turns with the pair; PFC keeps shear force and rolling
 // moment in the contact's local frame, which is this rotation).

@@ -2,6 +2,13 @@
 // describes, then for each stage applies its changes and cycles it in chunks,
 // measuring, writing frames and printing progress between chunks (never per
 // step). Writes the run folder described in docs/scenario.md.
+//
+// It keeps its work like the slope trial and the shear test: a checkpoint
+// (checkpoint.bin in the run folder, io/checkpoint.hpp) at the start, every
+// simulation.checkpoint_interval_min minutes and/or checkpoint_interval_steps
+// steps, and on SIGINT / SIGTERM (then Interrupted); resume_run continues from
+// it bit for bit (same thread count), the outputs continuing where the
+// checkpoint left them (no row or frame lost or repeated).
 #pragma once
 
 #include "core/world.hpp"
@@ -66,8 +73,18 @@ StageChanges apply_stage_changes(World& world, const StageSpec& stage, const std
 
 // Runs every stage and writes the run folder. Throws InputError for bad
 // input (also found while running, e.g. a fixed timestep above the critical
-// one) and InstabilityError when the run goes unstable; summary.json and
-// log.txt then hold what was done, with the error.
+// one), InstabilityError when the run goes unstable and Interrupted after a
+// stop request's checkpoint; summary.json and log.txt then hold what was
+// done, with the error. A folder holding an unfinished run (checkpoint.bin)
+// is refused (InputError naming --out). On success the checkpoint is removed
+// and final_state.csv holds the final particles, every double exactly.
 RunReport run_scenario(Scenario scenario, const RunOptions& options = {});
+
+// Continues the run in folder `dir` (its scenario.resolved.toml and
+// checkpoint.bin) to its end. options.output_dir and options.threads must be
+// unset (the run keeps its folder and thread count). A run that completed
+// earlier is reported and left alone (a report without stages). Throws
+// InputError naming --resume when `dir` is not a resumable run folder.
+RunReport resume_run(const std::string& dir, const RunOptions& options = {});
 
 } // namespace centridem

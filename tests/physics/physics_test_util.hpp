@@ -41,6 +41,47 @@ inline double rolling_radius(double R1, double R2) {
   return R1 * R2 / (R1 + R2);
 }
 
+// Viscous dashpot of a contact (PFC 7 "Linear Model", dp_nratio / dp_sratio):
+// coefficient c = 2 beta sqrt(mc k) [N s/m] with the ratio beta [-], the
+// effective mass mc = m1 m2/(m1 + m2) [kg] (ball-wall: m) and the spring
+// stiffness k [N/m]; the dashpot force is -c times the relative velocity
+// (normal or tangential part) of end 2 [N]. dp_mode: 0 full; 1 the normal
+// force (spring + dashpot) never tensile; 2 no shear dashpot while sliding;
+// 3 both.
+inline double dashpot_coefficient(double beta, double mc, double k) {
+  return 2.0 * beta * std::sqrt(mc * k);
+}
+
+// Adhesion (arrlinear; Gilabert, Roux & Castellanos 2007, Phys. Rev. E 75,
+// 011303, as ../shared/DESIGN.md "Physics" fixes it). With overlap d [m]
+// (d < 0 is a gap), F0 [N] and range D0 [m]:
+//   attraction A(d) = F0 for d >= 0, F0 (1 + d/D0) for -D0 < d < 0, else 0 [N];
+//   its potential U(d) = -integral_{-D0}^{d} A(x) dx, zero beyond the range:
+//     d >= 0: -F0 D0/2 - F0 d;  -D0 < d < 0: -F0 (D0 + d)^2/(2 D0) [J]
+//   (D0 = 0: -F0 d while overlapping).
+inline double attraction_N(double F0, double D0, double overlap_m) {
+  if (overlap_m >= 0) return F0;
+  if (-overlap_m >= D0) return 0.0;
+  return F0 * (1.0 + overlap_m / D0);
+}
+inline double attraction_potential_J(double F0, double D0, double overlap_m) {
+  if (overlap_m >= 0) return -F0 * (0.5 * D0 + overlap_m);
+  if (-overlap_m >= D0) return 0.0;
+  return -F0 * (D0 + overlap_m) * (D0 + overlap_m) / (2.0 * D0);
+}
+// An adhesive contact at rest under an external compressive normal load N [N]
+// has spring force kn d = N + F0. The friction and rolling limits use the
+// spring force (limits_use_net_force = false, the default) or the net force
+// N (true): largest tangential force mu (N + F0) or mu N [N]; largest rolling
+// moment mu_r Rbar (N + F0) or mu_r Rbar N [N m]. Source: contact_law.hpp
+// (PFC 7 "Rolling Resistance Linear Model" limits with the ARRLM attraction).
+inline double adhesive_shear_limit_N(double mu, double N, double F0, bool net) {
+  return mu * (net ? N : N + F0);
+}
+inline double adhesive_rolling_limit_N_m(double mu_r, double Rbar, double N, double F0, bool net) {
+  return mu_r * Rbar * (net ? N : N + F0);
+}
+
 inline ContactProperties props(ContactModel model, double E, double friction,
                                double rolling_friction = 0.0, double kratio = 1.5) {
   ContactProperties p;
