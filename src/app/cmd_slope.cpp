@@ -330,27 +330,7 @@ int run_slope_command(const SlopeCommandOptions& opt) {
     if (opt.scenario.empty())
       throw InputError("scenario", "(missing)", "a scenario file, or --resume RUN_DIR");
     sc = load_slope_scenario(opt.scenario, opt.set);
-    if (opt.scale != 0) {
-      // The same slope at another size reduction factor: the DEM box (the
-      // specimen's region) scales with it; the brick is cut to fit.
-      if (!(opt.scale > 0 && opt.scale <= 1))
-        throw InputError("--scale", fmt::format("{:g}", opt.scale),
-                         "a size reduction factor in (0, 1]");
-      // The same soil as the scenario's model: stresses follow n g / s and
-      // do not depend on s, and so must the cohesion (F0 / d^2 with the same
-      // grains). When the scenario divides F0 by its own s (the paper's rule),
-      // that F0 is kept, not divided by the new s.
-      if (sc.attraction_divided_by_s) {
-        sc.ball_ball.attraction_force_N /= sc.slope.size_reduction_factor;
-        sc.attraction_divided_by_s = false;
-      }
-      sc.slope.size_reduction_factor = opt.scale;
-      validate(sc.slope, "slope");
-      if (sc.specimen.source != SpecimenSpec::Source::file)
-        sc.specimen.region = Box{{0, 0, 0},
-                                 {sc.slope.length_m * opt.scale, sc.slope.breadth_m * opt.scale,
-                                  sc.slope.total_height_m * opt.scale}};
-    }
+    if (opt.scale != 0) apply_scale(sc, opt.scale);
     camp.spec = sc.campaign;
     if ((!opt.g_levels.empty()) + (!opt.search.empty()) + (!opt.schedule.empty()) +
             opt.search_auto >

@@ -514,6 +514,20 @@ SlopeScenario load_slope_scenario(const std::string& path,
                               overrides.empty() ? path : path + " (with --set)", base.string());
 }
 
+void apply_scale(SlopeScenario& sc, double s, const std::string& key) {
+  if (!(s > 0 && s <= 1))
+    throw InputError(key, fmt::format("{:g}", s), "a size reduction factor in (0, 1]");
+  if (sc.attraction_divided_by_s) {
+    sc.ball_ball.attraction_force_N /= sc.slope.size_reduction_factor;
+    sc.attraction_divided_by_s = false;
+  }
+  sc.slope.size_reduction_factor = s;
+  validate(sc.slope, "slope");
+  if (sc.specimen.source != SpecimenSpec::Source::file)
+    sc.specimen.region = Box{
+        {0, 0, 0}, {sc.slope.length_m * s, sc.slope.breadth_m * s, sc.slope.total_height_m * s}};
+}
+
 std::string resolved_slope_toml(const SlopeScenario& sc) {
   std::string o;
   if (!sc.description.empty()) o += "description = " + quote(sc.description) + "\n\n";

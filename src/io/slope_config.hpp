@@ -166,6 +166,14 @@ SlopeScenario parse_slope_scenario(std::string_view toml_text, const std::string
 SlopeScenario load_slope_scenario(const std::string& path,
                                   const std::vector<std::string>& overrides = {});
 
+// The same slope at another size reduction factor `s` (`--scale`): the DEM
+// box (the specimen's region) scales with it and the brick is cut to fit. The
+// soil stays the scenario's: when the scenario divides F0 by its own s (the
+// paper's rule), that F0 is kept, not divided by the new s, so stresses
+// (n g / s x s) and the cohesion (F0 / d^2, the same grains) do not change.
+// Throws InputError naming `key` unless 0 < s <= 1.
+void apply_scale(SlopeScenario& sc, double s, const std::string& key = "--scale");
+
 // The resolved scenario as TOML (every default explicit); parsing it back
 // gives the same scenario.
 std::string resolved_slope_toml(const SlopeScenario& s);

@@ -417,7 +417,7 @@ SpecimenSpec parse_specimen(std::string_view text, const std::string& source_nam
   return s;
 }
 
-SpecimenSpec load_specimen(const std::string& path) {
+SpecimenSpec load_specimen(const std::string& path, const std::vector<std::string>& overrides) {
   std::ifstream in(path, std::ios::binary);
   if (!in || fs::is_directory(path))
     throw InputError("scenario file", "\"" + path + "\"", "cannot be opened for reading");
@@ -425,7 +425,8 @@ SpecimenSpec load_specimen(const std::string& path) {
   buffer << in.rdbuf();
   fs::path base = fs::path(path).parent_path();
   if (base.empty()) base = ".";
-  return parse_specimen(buffer.str(), path, base.string());
+  return parse_specimen(tomlread::apply_overrides(buffer.str(), path, overrides),
+                        overrides.empty() ? path : path + " (with --set)", base.string());
 }
 
 // ------------------------------------------------------------ TOML writing --

@@ -119,7 +119,9 @@ struct SpecimenSpec {
 SpecimenSpec parse_specimen(std::string_view toml_text, const std::string& source_name,
                             const std::string& base_dir,
                             const std::optional<Box>& default_region = std::nullopt);
-SpecimenSpec load_specimen(const std::string& scenario_path);
+// `overrides`: `KEY = VALUE` lines merged over the file (tomlread::apply_overrides).
+SpecimenSpec load_specimen(const std::string& scenario_path,
+                           const std::vector<std::string>& overrides = {});
 
 // The specimen as TOML (every default explicit), for the run folder.
 std::string resolved_specimen_toml(const SpecimenSpec& s);

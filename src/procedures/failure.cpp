@@ -208,7 +208,10 @@ SlopeState FailureMonitor::update(const World& world, double time_s) {
                              : criteria_.moving_speed_factor * std::sqrt(r.gravity_m_s2 * r.d50_m);
   }
   r.time_s = time_s;
-  r.unbalanced_force_ratio = world.mean_unbalanced_force_ratio();
+  const double toe_z = geometry_.toe_height();
+  r.unbalanced_force_ratio =
+      world.mean_unbalanced_force_ratio([&](std::size_t i) { return P.position[i].z > toe_z; });
+  r.model_unbalanced_force_ratio = world.mean_unbalanced_force_ratio();
 
   const SlidingMass mass = find_sliding_mass(world, criteria_.mass, r.d50_m);
   r.displacement_threshold_m = mass.threshold_m;
@@ -360,6 +363,7 @@ nlohmann::json to_json(const FailureReport& r) {
             {"checks", r.checks},
             {"time_s", r.time_s},
             {"unbalanced_force_ratio", r.unbalanced_force_ratio},
+            {"model_unbalanced_force_ratio", r.model_unbalanced_force_ratio},
             {"d50_m", r.d50_m},
             {"gravity_m_s2", r.gravity_m_s2},
             {"displacement_threshold_m", r.displacement_threshold_m},
@@ -415,6 +419,7 @@ nlohmann::json FailureMonitor::save() const {
                  {"checks", r.checks},
                  {"time_s", r.time_s},
                  {"ratio", r.unbalanced_force_ratio},
+                 {"model_ratio", r.model_unbalanced_force_ratio},
                  {"d50_m", r.d50_m},
                  {"gravity_m_s2", r.gravity_m_s2},
                  {"threshold_m", r.displacement_threshold_m},
@@ -465,6 +470,7 @@ void FailureMonitor::restore(const nlohmann::json& j) {
   r.checks = q.at("checks");
   r.time_s = q.at("time_s");
   r.unbalanced_force_ratio = q.at("ratio");
+  r.model_unbalanced_force_ratio = q.value("model_ratio", 0.0);
   r.d50_m = q.at("d50_m");
   r.gravity_m_s2 = q.at("gravity_m_s2");
   r.displacement_threshold_m = q.at("threshold_m");

@@ -110,21 +110,48 @@ FoundationResult foundation_from_json(const json& j) {
   return f;
 }
 
-std::array<double, 3> layer_porosities(const World& w, const Box& box, double margin) {
+std::vector<double> porosity_layers(const World& w, const Box& box, double margin, int layers) {
   const ParticleStore& P = w.particles();
   const double x0 = box.lo.x + margin, x1 = box.hi.x - margin;
   const double y0 = box.lo.y + margin, y1 = box.hi.y - margin;
-  const double z0 = box.lo.z + margin, dz = (box.hi.z - box.lo.z - 2 * margin) / 3.0;
-  std::array<double, 3> solid{};
+  const double z0 = box.lo.z + margin, dz = (box.hi.z - box.lo.z - 2 * margin) / layers;
+  std::vector<double> solid(static_cast<std::size_t>(layers), 0.0);
   for (std::size_t i = 0; i < P.size(); ++i) {
     const Vec3& c = P.position[i];
     if (c.x < x0 || c.x > x1 || c.y < y0 || c.y > y1) continue;
-    for (int k = 0; k < 3; ++k)
-      solid[k] += sphere_slab_volume(c.z, P.radius[i], z0 + k * dz, z0 + (k + 1) * dz);
+    for (int k = 0; k < layers; ++k)
+      solid[static_cast<std::size_t>(k)] +=
+          sphere_slab_volume(c.z, P.radius[i], z0 + k * dz, z0 + (k + 1) * dz);
   }
-  std::array<double, 3> n{};
-  for (int k = 0; k < 3; ++k) n[k] = 1.0 - solid[k] / ((x1 - x0) * (y1 - y0) * dz);
-  return n;
+  for (double& v : solid) v = 1.0 - v / ((x1 - x0) * (y1 - y0) * dz);
+  return solid;
+}
+
+std::array<double, 3> layer_porosities(const World& w, const Box& box, double margin) {
+  const std::vector<double> n = porosity_layers(w, box, margin, 3);
+  return {n[0], n[1], n[2]};
+}
+
+PorosityProfile foundation_porosity_profile(const World& w, const Box& box) {
+  PorosityProfile p;
+  double dmax = 0;
+  for (double r : w.particles().radius) dmax = std::max(dmax, 2 * r);
+  const double d50 = median_diameter(w.particles());
+  const double span = box.hi.z - box.lo.z - 2 * dmax;
+  if (!(span > 0) || !(d50 > 0)) return p;
+  const int layers = std::max(3, static_cast<int>(std::floor(span / (2 * d50))));
+  p.margin_m = dmax;
+  p.layer_m = span / layers;
+  p.porosity = porosity_layers(w, box, dmax, layers);
+  for (int k = 0; k < layers; ++k) p.z_bottom_m.push_back(box.lo.z + dmax + k * p.layer_m);
+  return p;
+}
+
+nlohmann::json to_json(const PorosityProfile& p) {
+  return {{"margin_m", p.margin_m},
+          {"layer_m", p.layer_m},
+          {"z_bottom_m", p.z_bottom_m},
+          {"porosity", p.porosity}};
 }
 
 double kinetic_energy_ratio(const World& w, const Vec3& at, double d50) {

@@ -29,6 +29,7 @@
 #include <string>
 #include <string_view>
 #include <utility>
+#include <vector>
 
 namespace centridem {
 
@@ -105,6 +106,24 @@ PreparedFoundationFile ensure_prepared_foundation(const SlopeScenario& sc,
 // inside each of its faces (walls, floor, and the rough top); exact in z (each
 // sphere's slice of a layer), centre based in x and y [-].
 std::array<double, 3> layer_porosities(const World& world, const Box& box, double margin_m);
+
+// The same measurement in `layers` equal horizontal layers: a porosity
+// profile (bottom first) [-].
+std::vector<double> porosity_layers(const World& world, const Box& box, double margin_m,
+                                    int layers);
+
+// A foundation's porosity against height in its design box (the chamber up
+// to the design height): layers about 2 d50 thick between one d_max above the
+// floor and one d_max below the top, one d_max left out inside every side
+// wall (as for the thirds); at least 3 layers.
+struct PorosityProfile {
+  double margin_m = 0;            // d_max [m]
+  double layer_m = 0;             // layer thickness [m]
+  std::vector<double> z_bottom_m; // each layer's bottom [m]
+  std::vector<double> porosity;   // [-]
+};
+PorosityProfile foundation_porosity_profile(const World& world, const Box& design_box);
+nlohmann::json to_json(const PorosityProfile& p);
 
 // The surface of a foundation: the highest particle top (z + r) in columns
 // 2 d50 wide along x (over the whole breadth); min and mean over the columns [m].

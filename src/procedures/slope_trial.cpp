@@ -436,7 +436,7 @@ SlopeTrialResult run_slope_trial(const SlopeScenario& sc, const SlopeTrialPlan& 
       }
       if (seconds_since(last_progress) >= o.progress_interval_s) {
         const FailureReport& q = monitor->report();
-        say(fmt::format("level {:g} g: t = {:.5f} s of {:g}, step {}, ratio {:.3g}, {}, "
+        say(fmt::format("level {:g} g: t = {:.5f} s of {:g}, step {}, slope ratio {:.3g}, {}, "
                         "largest moved group {} particles, {:.3g} particle-steps/s",
                         g, world.time() - pr.level_t0, ts.max_time_s, world.step_count(),
                         q.unbalanced_force_ratio, to_string(q.state), q.largest_group_particles,

@@ -318,6 +318,46 @@ TEST(FailureMonitor, NeedsASignificantMassMovingOnConsecutiveChecks) {
   EXPECT_DOUBLE_EQ(*mon.report().onset_time_s, 0.011);
 }
 
+// "At rest" is the slope body's: the mean unbalanced-force ratio of the
+// particles above the foundation, not of the whole model, whose foundation
+// dilutes it (at the paper's size the whole-model ratio fell below 1e-4 0.6 ms
+// after the cut and two trials were called stable before anything moved).
+// Closed form: the lattice has no contacts; each foundation grain is held by
+// an applied force -m g (unbalanced 0, applied 2 m g), each slope grain falls
+// freely (unbalanced m g, applied m g). So the slope's ratio is 1 and the
+// model's is sum_s m / (sum_s m + 2 sum_f m). With equilibrium_ratio between
+// the two, the slope is not at rest and never called stable.
+TEST(FailureMonitor, AtRestIsJudgedOnTheSlopeAboveTheFoundation) {
+  LatticeSlope s;
+  auto& P = s.w.particles_mut();
+  const double toe = s.g.toe_height();
+  double m_slope = 0, m_found = 0;
+  for (std::size_t i = 0; i < P.size(); ++i) {
+    const Vec3 g = s.w.body_field().acceleration(P.position[i], {});
+    if (P.position[i].z > toe) {
+      m_slope += P.mass[i];
+    } else {
+      P.applied_force[i] = -P.mass[i] * g;
+      m_found += P.mass[i];
+    }
+  }
+  ASSERT_GT(m_found, 0.0);
+  s.w.cycle(1);
+  const double model = s.w.mean_unbalanced_force_ratio();
+  const double slope = s.w.mean_unbalanced_force_ratio(
+      [&](std::size_t i) { return s.w.particles().position[i].z > toe; });
+  EXPECT_NEAR(slope, 1.0, 1e-9);
+  EXPECT_NEAR(model, m_slope / (m_slope + 2 * m_found), 1e-6);
+  FailureCriteria c;
+  c.equilibrium_ratio = 0.5 * (model + 1.0);
+  FailureMonitor mon(s.g, c);
+  for (int k = 0; k < 4; ++k) mon.update(s.w, 0.001 * k);
+  EXPECT_NEAR(mon.report().unbalanced_force_ratio, 1.0, 1e-9);
+  EXPECT_NEAR(mon.report().model_unbalanced_force_ratio, model, 1e-12);
+  EXPECT_EQ(mon.state(), SlopeState::undecided) << "a falling slope is not at rest";
+  EXPECT_FALSE(mon.report().settled);
+}
+
 // --------------------------------------------- small DEM slopes, cycled --
 //
 // A one-bench slope 4 mm high (DEM), 18 mm long and 5 mm across, on 1 mm of

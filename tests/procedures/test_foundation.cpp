@@ -264,3 +264,41 @@ TEST(Foundation, KineticEnergyRatioIsHalfVSquaredOverGD) {
   w.particles_mut().velocity[0] = {v, 0, 0};
   EXPECT_NEAR(kinetic_energy_ratio(w, {0, 0, 0}, 2 * r), v * v / (2 * g * 2 * r), 1e-12);
 }
+
+// Closed form: the porosity profile of a simple cubic lattice (12 x 12 x 12
+// spheres of diameter d): d_max = d50 = d, so the span 10 d is cut into 5
+// layers of 2 d, each spanning whole lattice periods: 1 - pi/6 in every layer;
+// three layers agree with the thirds.
+TEST(Foundation, PorosityProfileOfACubicLatticeIsOneMinusPiOverSixInEveryLayer) {
+  World w;
+  const double r = 0.5e-3, d = 2 * r;
+  const int n = 12;
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j)
+      for (int k = 0; k < n; ++k)
+        w.add_particle({(2 * i + 1) * r, (2 * j + 1) * r, (2 * k + 1) * r}, r, 2633.0);
+  const Box box{{0, 0, 0}, {n * d, n * d, n * d}};
+  const PorosityProfile p = foundation_porosity_profile(w, box);
+  ASSERT_EQ(p.porosity.size(), 5u);
+  EXPECT_NEAR(p.layer_m, 2 * d, 1e-15);
+  EXPECT_NEAR(p.margin_m, d, 1e-15);
+  for (std::size_t k = 0; k < p.porosity.size(); ++k) {
+    EXPECT_NEAR(p.porosity[k], 1 - std::numbers::pi / 6, 1e-12) << "layer " << k;
+    EXPECT_NEAR(p.z_bottom_m[k], d + 2 * d * static_cast<double>(k), 1e-15);
+  }
+  const std::vector<double> three = porosity_layers(w, box, d, 3);
+  const std::array<double, 3> thirds = layer_porosities(w, box, d);
+  for (int k = 0; k < 3; ++k) EXPECT_EQ(three[k], thirds[k]);
+  // A vacancy in the middle layer raises only that layer's porosity, by one
+  // sphere over the layer's volume (10 d x 10 d x 2 d).
+  w.remove_particles([&](std::size_t i) {
+    const Vec3& x = w.particles().position[i];
+    return std::abs(x.x - 5.5 * d) < r && std::abs(x.y - 5.5 * d) < r &&
+           std::abs(x.z - 5.5 * d) < r;
+  });
+  const PorosityProfile q = foundation_porosity_profile(w, box);
+  const double sphere = 4.0 / 3.0 * std::numbers::pi * r * r * r;
+  for (std::size_t k = 0; k < q.porosity.size(); ++k)
+    EXPECT_NEAR(q.porosity[k] - p.porosity[k], k == 2 ? sphere / (200 * d * d * d) : 0.0, 1e-12)
+        << "layer " << k;
+}
