@@ -39,6 +39,7 @@ const Keys kTrialKeys = {"local_damping",
                          "rest_kinetic_ratio",
                          "check_interval_steps",
                          "max_time_s",
+                         "min_time_s",
                          "after_failure_time_s",
                          "after_cut",
                          "at_cut",
@@ -380,6 +381,13 @@ SlopeScenario parse_slope_scenario(std::string_view text, const std::string& sou
       tr.check_interval_steps = *v;
     if (auto v = opt_number(*t, P, "max_time_s", positive, "trial time after the cut > 0 [s]"))
       tr.max_time_s = *v;
+    if (auto v = opt_number(*t, P, "min_time_s", non_negative,
+                            "trial time after the cut before the slope may be called stable "
+                            ">= 0 [s]"))
+      tr.min_time_s = *v;
+    if (tr.min_time_s > tr.max_time_s)
+      throw InputError(P + ".min_time_s", num(tr.min_time_s),
+                       fmt::format("at most {}.max_time_s = {} [s]", P, num(tr.max_time_s)));
     if (auto v = opt_number(*t, P, "after_failure_time_s", non_negative,
                             "time to follow a slide after its onset >= 0 [s]"))
       tr.after_failure_time_s = *v;
@@ -569,13 +577,14 @@ std::string resolved_slope_toml(const SlopeScenario& sc) {
   const TrialSpec& t = sc.trial;
   o += fmt::format("\n[trial]\nlocal_damping = {}\nequilibrium_ratio = {}\n"
                    "foundation_max_steps = {}\nrest_kinetic_ratio = {}\ncheck_interval_steps = {}\n"
-                   "max_time_s = {}\n"
+                   "max_time_s = {}\nmin_time_s = {}\n"
                    "after_failure_time_s = {}\nafter_cut = {}\nat_cut = {}\nthreads = {}\n"
                    "checkpoint_interval_min = {}\ncheckpoint_interval_steps = {}\n",
                    num(t.local_damping), num(t.equilibrium_ratio), t.foundation_max_steps,
                    num(t.rest_kinetic_ratio), t.check_interval_steps, num(t.max_time_s),
-                   num(t.after_failure_time_s), inline_patch(t.after_cut), inline_patch(t.at_cut),
-                   t.threads, num(t.checkpoint_interval_min), t.checkpoint_interval_steps);
+                   num(t.min_time_s), num(t.after_failure_time_s), inline_patch(t.after_cut),
+                   inline_patch(t.at_cut), t.threads, num(t.checkpoint_interval_min),
+                   t.checkpoint_interval_steps);
   const FailureCriteria& c = sc.failure;
   o += fmt::format("\n[failure]\ndisplacement_threshold_d50 = {}\ndisplacement_threshold_m = {}\n"
                    "link_distance_factor = {}\nmin_particles = {}\nmin_volume_fraction = {}\n"

@@ -93,8 +93,14 @@ struct TrialSpec {
   // At rest also means little motion: kinetic energy / (weight x d50) below
   // this (a packing without contacts falling freely is not at rest) [-].
   double rest_kinetic_ratio = 1e-6;
-  long check_interval_steps = 1000;   // steps between failure checks
-  double max_time_s = 0.15;           // trial time after the cut [s, DEM]
+  long check_interval_steps = 1000; // steps between failure checks
+  double max_time_s = 0.15;         // trial time after the cut [s, DEM]
+  // The slope is not called stable before this trial time after the cut,
+  // however still it stands (it is watched on; a slide may still start) [s,
+  // DEM]. At rest early is not stable: a cohesive slope stands still for a
+  // while after the cut and may fail later (the paper's slopes were watched
+  // 0.023-0.032 s before being called stable).
+  double min_time_s = 0.0;
   double after_failure_time_s = 0.05; // extra time to watch a slide after onset [s, DEM]
   // Contact defaults for contacts made after the cut (patch over the soil's):
   // mu_r = 0 (paper section 3.3: "mu_r was set to zero for all new ball-ball

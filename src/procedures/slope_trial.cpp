@@ -411,7 +411,7 @@ SlopeTrialResult run_slope_trial(const SlopeScenario& sc, const SlopeTrialPlan& 
       if (into % chunk == 0) {
         const double t = world.time() - pr.level_t0;
         const FailureReport& r = monitor->report();
-        if (monitor->stable()) break;
+        if (monitor->stable() && t >= ts.min_time_s) break;
         if (monitor->failed() &&
             (monitor->finished() ||
              (r.onset_time_s && t - *r.onset_time_s >= ts.after_failure_time_s)))

@@ -137,6 +137,20 @@ TEST_F(SlopeTrialTest, AdhesiveSlopeAtLowGStandsAndFrictionlessOneFails) {
   EXPECT_FALSE(a.foundation.brick_from_cache);
   EXPECT_TRUE(fs::exists(a.foundation.brick_file));
 
+  // trial.min_time_s: at rest early is not yet stable; the same slope is
+  // watched on until the minimum time and only then called stable.
+  const double t_rest = a.levels[0].report.time_s;
+  SlopeScenario watched = tiny(false);
+  watched.trial.min_time_s = 3 * t_rest;
+  const SlopeTrialResult w = run_slope_trial(watched, plan, options("w"));
+  ASSERT_EQ(w.levels.size(), 1u);
+  EXPECT_EQ(w.levels[0].report.state, SlopeState::stable);
+  EXPECT_FALSE(w.levels[0].time_limit);
+  EXPECT_GE(w.levels[0].report.time_s, 3 * t_rest - 1e-12);
+  const double interval = t_rest / a.levels[0].report.checks; // checks at k x interval
+  EXPECT_LT(w.levels[0].report.time_s, 3 * t_rest + interval + 1e-12)
+      << "stops at the first check after the minimum time";
+
   // No friction, no rolling resistance, no adhesion after the cut: it slides.
   const SlopeTrialResult b = run_slope_trial(tiny(true), plan, options("b"));
   ASSERT_EQ(b.levels.size(), 1u);
