@@ -218,6 +218,58 @@ std::string bench_list(const json& a) {
   return s;
 }
 
+// The critical g of a campaign in words (summary.md and the last line).
+std::string critical_in_words(const json& c) {
+  if (!c.is_object()) return "not bracketed: no trial failed";
+  auto g = [&](const char* k) { return c.at(k).get<double>(); };
+  if (c.contains("failed_g")) {
+    if (c.at("stable_g").is_null())
+      return fmt::format("at or below {:g} g: the lowest level tried already fails", g("failed_g"));
+    std::string s =
+        fmt::format("between {:g} g (stable) and {:g} g (failed)", g("stable_g"), g("failed_g"));
+    if (c.contains("estimate_g")) s += fmt::format(", estimate {:g} g", g("estimate_g"));
+    return s;
+  }
+  if (c.contains("below_g"))
+    return fmt::format("below {:g} g: {}", g("below_g"), c.value("note", ""));
+  if (c.contains("above_g"))
+    return fmt::format("above {:g} g: {}", g("above_g"), c.value("note", ""));
+  if (c.contains("first_slide_g")) {
+    std::string all;
+    for (const json& v : c.at("slides_g"))
+      all += fmt::format("{}{:g}", all.empty() ? "" : ", ", v.get<double>());
+    return fmt::format("first slide at {:g} g (slides at {} g)", g("first_slide_g"), all);
+  }
+  return c.dump();
+}
+
+// The command that started the campaign, as typed (options in a fixed order).
+std::string command_line(const SlopeCommandOptions& o) {
+  auto q = [](const std::string& v) {
+    return v.find_first_of(" '\"{}[]=*?$") == std::string::npos ? v : "'" + v + "'";
+  };
+  if (!o.resume_dir.empty()) return "centridem slope --resume " + q(o.resume_dir);
+  std::string c = "centridem slope " + q(o.scenario);
+  if (o.scale != 0) c += fmt::format(" --scale {:g}", o.scale);
+  for (double g : o.g_levels) c += fmt::format(" --g {:g}", g);
+  if (!o.search.empty()) {
+    c += " --search";
+    for (double g : o.search) c += fmt::format(" {:g}", g);
+  }
+  if (o.search_auto) c += " --search-auto";
+  if (!o.schedule.empty()) {
+    c += " --schedule";
+    for (double g : o.schedule) c += fmt::format(" {:g}", g);
+  }
+  if (o.tolerance_g != 0) c += fmt::format(" --tolerance {:g}", o.tolerance_g);
+  for (const std::string& kv : o.set) c += " --set " + q(kv);
+  if (o.jobs > 0) c += fmt::format(" --jobs {}", o.jobs);
+  if (o.threads >= 0) c += fmt::format(" --threads {}", o.threads);
+  if (!o.out_dir.empty()) c += " --out " + q(o.out_dir);
+  if (!o.cache_dir.empty()) c += " --cache " + q(o.cache_dir);
+  return c;
+}
+
 json trial_row(const TrialOutcome& t) {
   json row = {{"g_level", t.g}, {"dir", t.dir}};
   if (!t.done()) {
@@ -545,9 +597,9 @@ int run_slope_command(const SlopeCommandOptions& opt) {
   json rows = json::array();
   std::vector<std::pair<double, json>> plotted;
   std::string md = fmt::format("# {} — slope campaign\n\nScenario: `{}` (s = {:g}). Command: "
-                               "`centridem slope ...`; folder `{}`.\n\n",
+                               "`{}`; folder `{}`.\n\n",
                                sc.name.empty() ? "benched slope" : sc.name, sc.source_path,
-                               sc.slope.size_reduction_factor, out.string());
+                               sc.slope.size_reduction_factor, command_line(opt), out.string());
   md += "| g-level | state | onset (s) | starts at | particles sliding | volume % | benches "
         "crossed | runout (model mm) |\n|---|---|---|---|---|---|---|---|\n";
   std::vector<double> slide_g;
@@ -586,8 +638,7 @@ int run_slope_command(const SlopeCommandOptions& opt) {
   else if (critical.is_object() && critical.contains("first_slide_g"))
     title_extra = fmt::format(" (first slide at {:g} g)", critical["first_slide_g"].get<double>());
   if (!plotted.empty()) write_plot(sc, plotted, title_extra, out / "g_levels.png");
-  md += "\nCritical g: " + (critical.is_null() ? std::string("not bracketed") : critical.dump()) +
-        "\n";
+  md += "\nCritical g: " + critical_in_words(critical) + ".\n";
   if (foundation)
     md += fmt::format("\nPrepared foundation: {} particles (generated {}, trimmed {}), porosity "
                       "by thirds (bottom, middle, top) {:.4f} / {:.4f} / {:.4f}, coordination "
@@ -642,7 +693,7 @@ int run_slope_command(const SlopeCommandOptions& opt) {
                  failed ? benches : "-", format_duration(t.result["wall_seconds"].get<double>()));
     }
   }
-  if (!critical.is_null()) fmt::print("critical g: {}\n", critical.dump());
+  fmt::print("critical g: {}\n", critical_in_words(critical));
   fmt::print("wrote {}: summary.md, summary.json, g_levels.png; pictures in <trial>/pictures/, "
              "ParaView series <trial>/slope.pvd ({})\n",
              out.string(), format_duration(seconds_since(t0)));

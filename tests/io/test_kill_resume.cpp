@@ -212,3 +212,19 @@ TEST_F(KillResume, SigintWritesACheckpointAndTheRunResumes) {
 }
 
 } // namespace
+
+// The summary says how the run was started and the critical g in words (no
+// placeholder, no raw JSON; issue 19).
+TEST_F(KillResume, SummarySaysTheCommandAndTheCriticalGInWords) {
+  const std::string md = slurp(dir_ / "ref" / "summary.md");
+  const std::string command = "Command: `centridem slope " + (dir_ / "tiny.toml").string() +
+                              " --out " + (dir_ / "ref").string() + " --cache " +
+                              (dir_ / "cache").string() + "`";
+  EXPECT_NE(md.find(command), std::string::npos) << md;
+  const auto at = md.find("Critical g: ");
+  ASSERT_NE(at, std::string::npos) << md;
+  const std::string line = md.substr(at, md.find('\n', at) - at);
+  EXPECT_EQ(line.find('{'), std::string::npos) << line;
+  EXPECT_EQ(line, "Critical g: at or below 20 g: the lowest level tried already fails.")
+      << "the tiny slope (no friction after the cut) fails at 20 g, its only level";
+}
