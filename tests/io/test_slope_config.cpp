@@ -100,13 +100,12 @@ TEST(SlopeConfig, BadKeysAreNamed) {
   EXPECT_NE(message_of(replaced(t, "[campaign]\n", "[failure]\nmin_particles = 0\n\n[campaign]\n"))
                 .find("failure.min_particles"),
             std::string::npos);
-  const std::string late =
-      message_of(replaced(t, "min_time_s = 0.03", "min_time_s = 0.2"));
+  const std::string late = message_of(replaced(t, "min_time_s = 0.03", "min_time_s = 0.2"));
   EXPECT_NE(late.find("trial.min_time_s"), std::string::npos) << late;
   EXPECT_NE(late.find("trial.max_time_s = 0.15"), std::string::npos) << late;
-  EXPECT_NE(message_of(replaced(t, "min_time_s = 0.03", "min_time_s = -1"))
-                .find("trial.min_time_s"),
-            std::string::npos);
+  EXPECT_NE(
+      message_of(replaced(t, "min_time_s = 0.03", "min_time_s = -1")).find("trial.min_time_s"),
+      std::string::npos);
   EXPECT_EQ(message_of(t), "(accepted)");
 }
 
