@@ -1,13 +1,17 @@
 #include "app/cmd_generate.hpp"
 
+#include "app/cli.hpp"
+
 #include "core/errors.hpp"
 #include "core/world.hpp"
 #include "io/checkpoint.hpp"
+#include "io/output.hpp"
 #include "io/particle_file.hpp"
 #include "io/slope_config.hpp"
 #include "io/specimen_config.hpp"
 #include "io/vtk.hpp"
 #include "procedures/foundation.hpp"
+#include "procedures/gsd.hpp"
 #include "procedures/slope_geometry.hpp"
 #include "procedures/specimen.hpp"
 
@@ -54,10 +58,18 @@ void write_text(const fs::path& p, const std::string& text) {
 int generate_foundation(const GenerateOptions& o,
                         const std::function<void(std::string_view)>& log) {
   SlopeScenario sc = load_slope_scenario(o.scenario, o.set);
+  cli::print_warnings(sc.specimen.warnings);
   if (o.scale != 0) apply_scale(sc, o.scale);
   const SlopeGeometry geometry(sc.slope);
   const fs::path out = o.out_dir.empty() ? default_out(o.scenario, "_foundation") : o.out_dir;
-  fs::create_directories(out);
+  if (o.check) {
+    check_output_folder(out.string(), "--out");
+    check_output_folder(o.cache_dir, "--cache");
+    fmt::print("{}", resolved_slope_toml(sc));
+    fmt::print(stderr, "centridem generate: {} checked; nothing generated (--check)\n", o.scenario);
+    return 0;
+  }
+  make_directories(out.string());
   const int threads = o.threads > 0 ? o.threads : 0;
   log(fmt::format("slope foundation: {} (s = {:g}; DEM box {:.2f} x {:.2f} x {:.2f} mm)",
                   sc.name.empty() ? "benched slope" : sc.name, sc.slope.size_reduction_factor,
@@ -129,7 +141,15 @@ int run_generate_command(const GenerateOptions& o) {
     throw InputError("--scale", fmt::format("{:g}", o.scale),
                      "only with a slope scenario (a [slope] table)");
   const SpecimenSpec spec = load_specimen(o.scenario, o.set);
+  cli::print_warnings(spec.warnings);
   const std::string out = o.out_dir.empty() ? default_out(o.scenario, "_specimen") : o.out_dir;
+  if (o.check) {
+    check_output_folder(out, "--out");
+    check_specimen_size(spec, resolve_gradation(spec));
+    fmt::print("{}", resolved_specimen_toml(spec));
+    fmt::print(stderr, "centridem generate: {} checked; nothing generated (--check)\n", o.scenario);
+    return 0;
+  }
   WorldSettings ws;
   ws.threads = o.threads > 0 ? o.threads : 0;
   World world(ws);
@@ -154,36 +174,16 @@ CLI::App* add_generate_subcommand(CLI::App& app) {
       ->required();
   cmd->add_option("--out", o->out_dir,
                   "output folder (default: runs/<scenario stem>_specimen, or _foundation)");
-  cmd->add_option("--threads", o->threads, "OpenMP threads (0 = the OpenMP default)")
-      ->check(CLI::NonNegativeNumber);
-  cmd->add_option("--set", o->set,
-                  "KEY=VALUE over the scenario file (repeatable; TOML value, e.g. "
-                  "specimen.seed=2 or 'preparation.compaction_g_level=40')");
+  cli::add_threads_option(*cmd, o->threads, "OpenMP threads (0 = the OpenMP default)");
+  cli::add_set_option(*cmd, o->set);
   cmd->add_option("--scale", o->scale,
-                  "slope scenarios: another size reduction factor (as `slope --scale`)");
+                  "slope scenarios: another size reduction factor (as `slope --scale`)")
+      ->check(cli::positive_number(1));
   cmd->add_option("--cache", o->cache_dir,
                   "slope scenarios: folder of cached bricks and prepared foundations (default "
                   "runs/cache)");
-  cmd->callback([o]() {
-    int rc = 0;
-    try {
-      rc = run_generate_command(*o);
-    } catch (const InputError& e) {
-      fmt::print(stderr, "centridem: error: {}\n", e.what());
-      rc = 2;
-    } catch (const InstabilityError& e) {
-      fmt::print(stderr, "centridem: unstable: {}\n", e.what());
-      rc = 3;
-    } catch (const std::exception& e) {
-      fmt::print(stderr, "centridem: error: {}\n", e.what());
-      rc = 1;
-    }
-    if (rc != 0) {
-      std::fflush(stdout);
-      std::fflush(stderr);
-      std::exit(rc);
-    }
-  });
+  cli::add_check_flag(*cmd, o->check);
+  cmd->callback([o]() { cli::run_subcommand([o] { return run_generate_command(*o); }); });
   return cmd;
 }
 

@@ -31,6 +31,7 @@ struct GenerateOptions {
   std::vector<std::string> set; // KEY=VALUE overrides (TOML values)
   double scale = 0;             // slope only: another size reduction factor (0 = the file's)
   std::string cache_dir = "runs/cache"; // slope only: bricks and prepared foundations
+  bool check = false;                   // --check: print the resolved scenario, generate nothing
 };
 
 // Runs the command; returns the exit code (0). Throws InputError for bad

@@ -1,11 +1,13 @@
 #include "app/cmd_shear.hpp"
 
+#include "app/cli.hpp"
 #include "app/jobs.hpp"
 
 #include "core/errors.hpp"
 #include "core/interrupt.hpp"
 #include "core/world.hpp"
 #include "io/csv.hpp"
+#include "io/output.hpp"
 #include "io/plot.hpp"
 #include "io/shear_config.hpp"
 #include "procedures/direct_shear.hpp"
@@ -331,10 +333,11 @@ int run_shear_command(const ShearCommandOptions& o) {
   if (!o.resume_dir.empty() || report_only) {
     const std::string flag = report_only ? "--report" : "--resume";
     out = report_only ? o.report_dir : o.resume_dir;
-    if (!o.scenario.empty() || !o.out_dir.empty() || !o.pressures_kPa.empty())
+    if (!o.scenario.empty() || !o.out_dir.empty() || !o.pressures_kPa.empty() || !o.set.empty() ||
+        o.check)
       throw InputError(flag, out.string(),
-                       "works on a run folder as it was started: give no scenario, --out or "
-                       "--pressure with it");
+                       "works on a run folder as it was started: give no scenario, --out, "
+                       "--pressure, --set or --check with it");
     if (!fs::exists(out / "scenario.toml") || !fs::exists(out / "pressures.json"))
       throw InputError(flag, out.string(),
                        "not a shear run folder (scenario.toml and pressures.json missing)");
@@ -352,13 +355,14 @@ int run_shear_command(const ShearCommandOptions& o) {
   } else {
     if (o.scenario.empty())
       throw InputError("scenario", "(missing)", "a scenario file, or --resume RUN_DIR");
-    sc = load_shear_scenario(o.scenario);
+    sc = load_shear_scenario(o.scenario, o.set);
+    cli::print_warnings(sc.specimen.warnings);
     sigmas = sc.normal_stresses_Pa;
     if (!o.pressures_kPa.empty()) {
       sigmas.clear();
       for (double p : o.pressures_kPa) {
-        if (!(p > 0) || !std::isfinite(p))
-          throw InputError("--pressure", fmt::format("{:g}", p), "a normal stress > 0 [kPa]");
+        if (!(p > 0) || !(p <= 1e6))
+          throw InputError("--pressure", fmt::format("{:g}", p), "a normal stress in (0, 1e6] kPa");
         sigmas.push_back(p * 1000);
         validate(sc.run_spec(sigmas.back()));
       }
@@ -379,7 +383,14 @@ int run_shear_command(const ShearCommandOptions& o) {
       out_s = "runs/" + stem + "_shear";
     }
     out = out_s;
-    fs::create_directories(out);
+    if (o.check) {
+      check_output_folder(out.string(), "--out");
+      fmt::print("{}", resolved_shear_toml(sc));
+      fmt::print(stderr, "centridem shear: {} checked, {} pressure(s); nothing run (--check)\n",
+                 o.scenario, sigmas.size());
+      return 0;
+    }
+    make_directories(out.string());
     for (double s : sigmas)
       if (fs::exists(checkpoint_path(out, s)))
         throw InputError("--out", out.string(),
@@ -548,32 +559,27 @@ CLI::App* add_shear_subcommand(CLI::App& app) {
   cmd->add_option("--report", o->report_dir,
                   "run nothing: rewrite the summary and plots of this run folder from what it "
                   "holds now (unfinished runs' curves so far drawn dashed, not in the fits)");
-  cmd->add_option("--jobs", o->jobs, "pressures run at once, as child processes (default 1)")
-      ->check(CLI::PositiveNumber);
+  cli::add_jobs_option(*cmd, o->jobs, "pressures run at once, as child processes (default 1)");
   cmd->add_option(
       "--pressure", o->pressures_kPa,
       "run only this normal pressure [kPa] (repeatable; default: shear.normal_stresses_Pa)");
   cmd->add_option("--progress", o->progress_interval_s, "seconds between progress lines")
-      ->check(CLI::PositiveNumber);
-  cmd->add_option("--threads", o->threads,
-                  "OpenMP threads per run (default: shear.threads; 0 = the OpenMP default)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(cli::positive_number());
+  cli::add_threads_option(*cmd, o->threads,
+                          "OpenMP threads per run (default: shear.threads; 0 = the OpenMP "
+                          "default)");
+  cli::add_set_option(*cmd, o->set);
+  cli::add_check_flag(*cmd, o->check);
   cmd->callback([o]() {
-    int rc = 0;
-    try {
-      rc = run_shear_command(*o);
-    } catch (...) {
-      rc = report_current_exception("");
-      if (rc > 128)
-        fmt::print(stderr, "centridem shear: continue with `centridem shear --resume {}`\n",
-                   o->resume_dir.empty() ? (o->out_dir.empty() ? "RUN_DIR" : o->out_dir)
+    cli::run_subcommand([o] { return run_shear_command(*o); },
+                        [o] {
+                          fmt::print(stderr,
+                                     "centridem shear: continue with `centridem shear --resume "
+                                     "{}`\n",
+                                     o->resume_dir.empty()
+                                         ? (o->out_dir.empty() ? "RUN_DIR" : o->out_dir)
                                          : o->resume_dir);
-    }
-    if (rc != 0) {
-      std::fflush(stdout);
-      std::fflush(stderr);
-      std::exit(rc);
-    }
+                        });
   });
   return cmd;
 }

@@ -31,6 +31,8 @@ struct ShearCommandOptions {
   std::vector<double> pressures_kPa; // empty: the scenario's list
   int threads = -1;                  // per run; < 0: the scenario's shear.threads
   double progress_interval_s = 10.0; // seconds between progress lines
+  std::vector<std::string> set;      // --set KEY=VALUE over the scenario
+  bool check = false;                // --check: print the resolved scenario, run nothing
 };
 
 // Runs the command; returns the exit code (0; 128 + signal when stopped, with

@@ -1,5 +1,6 @@
 #include "app/cmd_slope.hpp"
 
+#include "app/cli.hpp"
 #include "app/jobs.hpp"
 #include "core/errors.hpp"
 #include "core/interrupt.hpp"
@@ -367,10 +368,12 @@ int run_slope_command(const SlopeCommandOptions& opt) {
   if (!opt.resume_dir.empty()) {
     out = opt.resume_dir;
     if (!opt.scenario.empty() || !opt.g_levels.empty() || !opt.search.empty() ||
-        !opt.schedule.empty() || !opt.set.empty() || !opt.out_dir.empty())
+        !opt.schedule.empty() || !opt.set.empty() || !opt.out_dir.empty() || opt.check ||
+        opt.scale != 0 || opt.search_auto)
       throw InputError("--resume", opt.resume_dir,
                        "continues a run folder as it was started: give no scenario, --out, "
-                       "--g, --search, --schedule or --set with it");
+                       "--g, --search, --search-auto, --schedule, --set, --scale or --check "
+                       "with it");
     if (!fs::exists(out / "scenario.toml") || !fs::exists(out / "campaign.json"))
       throw InputError("--resume", opt.resume_dir,
                        "not a slope run folder (scenario.toml and campaign.json missing)");
@@ -382,6 +385,7 @@ int run_slope_command(const SlopeCommandOptions& opt) {
     if (opt.scenario.empty())
       throw InputError("scenario", "(missing)", "a scenario file, or --resume RUN_DIR");
     sc = load_slope_scenario(opt.scenario, opt.set);
+    cli::print_warnings(sc.specimen.warnings);
     if (opt.scale != 0) apply_scale(sc, opt.scale);
     camp.spec = sc.campaign;
     if ((!opt.g_levels.empty()) + (!opt.search.empty()) + (!opt.schedule.empty()) +
@@ -420,9 +424,10 @@ int run_slope_command(const SlopeCommandOptions& opt) {
       }
     }
     if (!opt.search.empty()) {
-      if (opt.search.size() != 2 || !(opt.search[0] > 0) || !(opt.search[1] > opt.search[0]))
+      if (opt.search.size() != 2 || !(opt.search[0] > 0) || !(opt.search[1] > opt.search[0]) ||
+          !(opt.search[1] <= 1e4))
         throw InputError("--search", fmt::format("{}", fmt::join(opt.search, " ")),
-                         "two g-levels STABLE FAILED with 0 < STABLE < FAILED");
+                         "two g-levels STABLE FAILED with 0 < STABLE < FAILED <= 10000");
       camp.spec.kind = CampaignKind::search;
       camp.spec.stable_g = opt.search[0];
       camp.spec.failed_g = opt.search[1];
@@ -440,6 +445,14 @@ int run_slope_command(const SlopeCommandOptions& opt) {
     camp.cache_dir = opt.cache_dir.empty()
                          ? (fs::absolute(out).parent_path() / "cache").lexically_normal().string()
                          : fs::absolute(opt.cache_dir).string();
+    if (opt.check) {
+      check_output_folder(out.string(), "--out");
+      check_output_folder(camp.cache_dir, "--cache");
+      fmt::print("{}", resolved_slope_toml(sc));
+      fmt::print("# campaign: {}\n", campaign_json(camp).dump());
+      fmt::print(stderr, "centridem slope: {} checked; nothing run (--check)\n", opt.scenario);
+      return 0;
+    }
     make_directories(out.string());
     if (fs::exists(out / "campaign.json"))
       throw InputError("--out", out.string(),
@@ -731,41 +744,34 @@ CLI::App* add_slope_subcommand(CLI::App& app) {
                   "one model, g raised from START by STEP up to MAX, each level held until "
                   "equilibrium or a slide (the centrifuge test's own loading)")
       ->expected(3);
-  cmd->add_option("--set", o->set,
-                  "override a scenario key, KEY=VALUE in TOML syntax (repeatable), e.g. --set "
-                  "'trial.after_cut = { rolling_friction = 0 }'; the resolved scenario.toml "
-                  "records the result");
+  cli::add_set_option(*cmd, o->set);
   cmd->add_option("--scale", o->scale,
                   "run the slope at this size reduction factor s instead of slope's (smaller: "
                   "fewer particles, faster; the specimen's region follows; stresses and the "
-                  "soil's F0 stay those of the scenario's model)");
+                  "soil's F0 stay those of the scenario's model)")
+      ->check(cli::positive_number(1));
   cmd->add_option("--tolerance", o->tolerance_g, "search: stop when the bracket is this narrow [g]")
-      ->check(CLI::PositiveNumber);
-  cmd->add_option("--jobs", o->jobs, "trials at once, as child processes (default: campaign.jobs)")
-      ->check(CLI::PositiveNumber);
-  cmd->add_option("--threads", o->threads,
-                  "OpenMP threads per trial (default: trial.threads; 0 = the OpenMP default)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(cli::positive_number(1e4));
+  cli::add_jobs_option(*cmd, o->jobs,
+                       "trials at once, as child processes (default: campaign.jobs)");
+  cli::add_threads_option(*cmd, o->threads,
+                          "OpenMP threads per trial (default: trial.threads; 0 = the OpenMP "
+                          "default)");
   cmd->add_option("--cache", o->cache_dir,
                   "folder of cached bricks (default: cache/ beside the output folder)");
   cmd->add_option("--progress", o->progress_interval_s, "seconds between progress lines")
-      ->check(CLI::PositiveNumber);
+      ->check(cli::positive_number());
+  cli::add_check_flag(*cmd, o->check);
   cmd->callback([o]() {
-    int rc = 0;
-    try {
-      rc = run_slope_command(*o);
-    } catch (...) {
-      rc = report_current_exception("");
-      if (rc > 128)
-        fmt::print(stderr, "centridem slope: continue with `centridem slope --resume {}`\n",
-                   o->resume_dir.empty() ? (o->out_dir.empty() ? "RUN_DIR" : o->out_dir)
+    cli::run_subcommand([o] { return run_slope_command(*o); },
+                        [o] {
+                          fmt::print(stderr,
+                                     "centridem slope: continue with `centridem slope --resume "
+                                     "{}`\n",
+                                     o->resume_dir.empty()
+                                         ? (o->out_dir.empty() ? "RUN_DIR" : o->out_dir)
                                          : o->resume_dir);
-    }
-    if (rc != 0) {
-      std::fflush(stdout);
-      std::fflush(stderr);
-      std::exit(rc);
-    }
+                        });
   });
   return cmd;
 }

@@ -34,6 +34,7 @@ struct SlopeCommandOptions {
   int jobs = 0;                    // 0: campaign.jobs
   int threads = -1;                // < 0: trial.threads
   double progress_interval_s = 10; // seconds between progress lines
+  bool check = false;              // --check: print the resolved scenario, run nothing
 };
 
 // Runs the command; returns the exit code. Throws InputError for bad input,

@@ -1,11 +1,13 @@
 // centridem: command line. Exit codes: 0 success, 2 bad input, 3 the run went
 // unstable, 128 + signal stopped by SIGINT / SIGTERM after a checkpoint, 1 any
 // other failure.
+#include "app/cli.hpp"
 #include "app/cmd_generate.hpp"
 #include "app/cmd_shear.hpp"
 #include "app/cmd_slope.hpp"
 #include "core/errors.hpp"
 #include "core/interrupt.hpp"
+#include "io/output.hpp"
 #include "io/scenario.hpp"
 #include "procedures/bench.hpp"
 #include "procedures/staged_run.hpp"
@@ -34,8 +36,10 @@ int run_bench_command(const BenchOptions& o) {
 struct RunCommand {
   std::string scenario;
   std::string out;
-  std::string resume; // run folder to continue
-  int threads = -1;   // -1: as the scenario says
+  std::string resume;           // run folder to continue
+  int threads = -1;             // -1: as the scenario says
+  std::vector<std::string> set; // --set KEY=VALUE
+  bool check = false;           // --check: print the resolved scenario, run nothing
 };
 
 int run_run_command(const RunCommand& c) {
@@ -48,20 +52,34 @@ int run_run_command(const RunCommand& c) {
       throw InputError("scenario", c.scenario,
                        "not with --resume: the run continues with the scenario it was started "
                        "with (scenario.resolved.toml in its folder)");
+    if (!c.set.empty() || c.check)
+      throw InputError(c.check ? "--check" : "--set", c.check ? "given" : c.set.front(),
+                       "not with --resume: the run continues with the scenario it was started "
+                       "with (scenario.resolved.toml in its folder)");
     resume_run(c.resume, o); // refuses --out and --threads, naming them
     return 0;
   }
   if (c.scenario.empty())
     throw InputError("scenario", "(missing)", "a scenario file, or --resume RUN_DIR");
-  run_scenario(load_scenario(c.scenario), o);
+  const Scenario sc = load_scenario(c.scenario, c.set);
+  cli::print_warnings(sc.warnings);
+  if (c.check) {
+    if (!c.out.empty()) check_output_folder(c.out, "--out");
+    fmt::print("{}", resolved_toml(sc));
+    fmt::print(stderr, "centridem run: {} checked; nothing run (--check)\n", c.scenario);
+    return 0;
+  }
+  run_scenario(sc, o);
   return 0;
 }
 
 } // namespace
 
 int main(int argc, char** argv) {
+  cli::use_passive_openmp_wait(argv);
   CLI::App app{"centridem: 3D DEM for geotechnical centrifuge modelling"};
   app.require_subcommand(1);
+  app.set_version_flag("--version", cli::version_string());
 
   BenchOptions bench;
   auto* cmd_bench = app.add_subcommand("bench", "throughput benchmark on the shared packing");
@@ -69,13 +87,13 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   cmd_bench->add_option("--steps", bench.steps, "timed steps")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(cli::whole_number(1, 1'000'000'000));
   cmd_bench->add_option("--warmup", bench.warmup_steps, "untimed steps first")
       ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
+      ->check(cli::whole_number(0, 1'000'000'000));
   cmd_bench->add_option("--threads", bench.threads, "thread counts to run, one run each")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(cli::whole_number(1, cli::kMaxThreads));
 
   RunCommand run;
   add_generate_subcommand(app); // runs itself from its callback
@@ -91,11 +109,13 @@ int main(int argc, char** argv) {
   cmd_run->add_option("--resume", run.resume,
                       "continue the run in this folder from its last checkpoint (no scenario, "
                       "--out or --threads with it)");
-  cmd_run
-      ->add_option("--threads", run.threads,
-                   "OpenMP threads, overrides simulation.threads (0 = the OpenMP default)")
-      ->check(CLI::NonNegativeNumber);
+  cli::add_threads_option(*cmd_run, run.threads,
+                          "OpenMP threads, overrides simulation.threads (0 = the OpenMP default)");
+  cli::add_set_option(*cmd_run, run.set);
+  cli::add_check_flag(*cmd_run, run.check);
 
+  cli::set_error_messages(app);
+  if (const int rc = cli::check_subcommand(app, argc, argv); rc != 0) return rc;
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

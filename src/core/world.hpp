@@ -181,10 +181,13 @@ public:
   // --- measurements ----------------------------------------------------------
   Measurements measure() const;
   Energy energy() const;
+  // PFC `mech.ratio.avg` over the free particles [-]. Summed in fixed blocks
+  // of particles whose partial sums are added in block order, so the value,
+  // and the step at which a run that waits for it stops, are the same bits on
+  // any number of threads.
   double mean_unbalanced_force_ratio() const;
   // The same ratio over the particles for which include(i) is true (a part of
-  // the model: the slope above its foundation, say), summed serially in index
-  // order, so it does not depend on the thread count; 0 when none [-].
+  // the model: the slope above its foundation, say); 0 when none [-].
   double mean_unbalanced_force_ratio(const std::function<bool(std::size_t)>& include) const;
   RegionMeasurement measure_region(const Box& box) const;
   std::vector<ContactView> ball_ball_contacts() const;
@@ -235,6 +238,9 @@ public:
 
 private:
   double applied_force_magnitude(std::size_t i) const; // the ratio's denominator term [N]
+  // The mean unbalanced-force ratio over the free particles (include: those of
+  // them it accepts; nullptr: all), in fixed blocks summed in order.
+  double unbalanced_force_ratio_over(const std::function<bool(std::size_t)>* include) const;
   void rebuild(std::vector<std::uint32_t> new_to_old);
   void rebuild_sorted();
   void ensure_built();

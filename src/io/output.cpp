@@ -1,5 +1,7 @@
 #include "io/output.hpp"
 
+#include "core/errors.hpp"
+
 #include <cerrno>
 #include <cstring>
 #include <filesystem>
@@ -57,9 +59,19 @@ void RunLog::warn(std::string_view line) {
 void make_directories(const std::string& path) {
   std::error_code ec;
   fs::create_directories(path, ec);
+  // A folder the user named (--out, --cache, output_dir) or one inside it: a
+  // path that cannot be a folder is bad input (exit 2), named with the reason.
   if (ec || !fs::is_directory(path))
-    throw std::runtime_error(fmt::format("cannot create the folder {}: {}", path,
-                                         ec ? ec.message() : "exists and is not a folder"));
+    throw InputError("output folder", "\"" + path + "\"",
+                     fmt::format("cannot be created ({}): give a folder that can be written",
+                                 ec ? ec.message() : "a file of that name exists"));
+}
+
+void check_output_folder(const std::string& path, const std::string& key) {
+  std::error_code ec;
+  if (fs::exists(path, ec) && !fs::is_directory(path, ec))
+    throw InputError(key, "\"" + path + "\"",
+                     "is a file: give a folder (it is made when it does not exist)");
 }
 
 void write_text_file(const std::string& path, std::string_view content) {

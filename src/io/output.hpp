@@ -34,8 +34,12 @@ private:
   std::string pending_; // lines printed before open()
 };
 
-// Creates the folder and its parents; throws std::runtime_error naming it.
+// Creates the folder and its parents; throws InputError naming it and the
+// reason when it cannot (a file of that name, no permission): exit 2.
 void make_directories(const std::string& path);
+// Refuses (InputError naming `key`) a path that exists and is not a folder:
+// what make_directories would refuse, checked before any work starts.
+void check_output_folder(const std::string& path, const std::string& key);
 // Writes `content` to `path` (replacing it); throws std::runtime_error.
 void write_text_file(const std::string& path, std::string_view content);
 // Writes to a temporary file beside `path`, then renames it over `path`, so

@@ -379,6 +379,10 @@ ContactProperties resolve(const ContactPatch& p, const std::optional<ContactProp
   return c;
 }
 
+// The largest body acceleration a scenario may ask for [m/s^2]: 1e6 g, beyond any centrifuge
+// (the largest reach about 1e3-1e4 g) and far below where a run's numbers overflow.
+constexpr double kMaxGravity_m_s2 = 1e6 * standard_gravity_m_s2;
+
 GravitySpec read_gravity(const toml::node& node, const std::string& path) {
   const toml::table& t = as_table(
       node, path, "acceleration_m_per_s2 = [x, y, z], or g_level (+ size_reduction_factor)");
@@ -394,6 +398,9 @@ GravitySpec read_gravity(const toml::node& node, const std::string& path) {
     g.form = GravitySpec::Form::acceleration;
     g.acceleration_m_per_s2 =
         as_vec3(*a, path_of(path, "acceleration_m_per_s2"), "the acceleration [m/s^2]");
+    if (!(norm(g.acceleration_m_per_s2) <= kMaxGravity_m_s2))
+      fail(path_of(path, "acceleration_m_per_s2"), *a,
+           fmt::format("an acceleration of at most {:g} m/s^2 (1e6 g)", kMaxGravity_m_s2));
     return g;
   }
   g.form = GravitySpec::Form::scaled;
@@ -405,6 +412,13 @@ GravitySpec read_gravity(const toml::node& node, const std::string& path) {
   g.size_reduction_factor = number(t, path, "size_reduction_factor", 1.0, positive,
                                    "the size reduction factor s: > 0 [-] (default 1)");
   g.direction = unit_vector(t, path, "direction", Vec3{0, 0, -1});
+  // n g / s must be a number a run can use: 1e308 would give inf and then NaN positions.
+  const double a = g.g_level * standard_gravity_m_s2 / g.size_reduction_factor;
+  if (!(a <= kMaxGravity_m_s2))
+    fail(path_of(path, "g_level"), *t.get("g_level"),
+         fmt::format("gravity n g / s = {:g} m/s^2 is beyond {:g} m/s^2 (1e6 g): check g_level "
+                     "and size_reduction_factor",
+                     a, kMaxGravity_m_s2));
   return g;
 }
 
@@ -475,11 +489,43 @@ SimulationSpec read_simulation(const toml::table* t, const std::string& default_
   return s;
 }
 
-ParticlesSpec read_particles(const toml::node* node, const std::string& base_dir) {
+// The state a run starts from must not trip its own overlap guard at the first step: two
+// particles (a line given twice, a packing not yet relaxed), or a particle and a wall (positions
+// or radii written in mm put the particles through walls placed in m) overlapping by more than
+// simulation.max_overlap_fraction of the (smaller) radius are refused here, exit 2, with the
+// lines named, instead of an "unstable" exit 3 at step 1.
+void check_start_overlaps(const Scenario& sc) {
+  const double guard = sc.simulation.world.max_overlap_fraction;
+  const auto& recs = sc.particles.records;
+  check_particle_overlaps(recs, sc.particles.path, guard);
+  for (const WallSpec& ws : sc.walls) {
+    const Wall w = ws.make();
+    for (const ParticleRecord& q : recs) {
+      const WallProximity p = wall_proximity(w, q.position);
+      const double overlap = q.radius - p.distance;
+      if (overlap > guard * q.radius)
+        throw InputError(
+            fmt::format("{}:{}", sc.particles.path, q.line),
+            fmt::format("a particle at ({:g}, {:g}, {:g}) m of radius {:g} m", q.position.x,
+                        q.position.y, q.position.z, q.radius),
+            fmt::format("{} wall \"{}\" by {:.3g} of its radius, more than the overlap guard "
+                        "allows ({:g}, simulation.max_overlap_fraction). Everything is SI: "
+                        "positions or radii written in mm put particles through walls placed in "
+                        "m",
+                        p.distance < 0 ? "it lies behind" : "it overlaps", ws.name,
+                        overlap / q.radius, guard));
+    }
+  }
+}
+
+ParticlesSpec read_particles(const toml::node* node, const std::string& base_dir,
+                             const toml::node& root) {
   const std::string p = "particles";
   if (!node)
-    missing(p, "a [particles] table with file = \"PATH\" (x y z r per line, SI) and "
-               "density_kg_m3");
+    missing(p,
+            "a [particles] table with file = \"PATH\" (x y z r per line, SI) and "
+            "density_kg_m3",
+            root);
   const toml::table& t = as_table(*node, p, "file, density_kg_m3, group");
   check_keys(t, p, kParticleKeys);
   ParticlesSpec s;
@@ -801,7 +847,11 @@ Scenario parse_table(const toml::table& root, const std::string& source_name,
     missing("particles", "a [particles] table with file = \"PATH\" and density_kg_m3: `centridem "
                          "run` does not generate the [specimen] yet; generate it with `centridem "
                          "generate` and give the particle file it writes");
-  sc.particles = read_particles(root.get("particles"), base_dir);
+  sc.particles = read_particles(root.get("particles"), base_dir, root);
+  if (auto w = tomlread::density_warning("particles.density_kg_m3", sc.particles.density_kg_m3);
+      !w.empty())
+    sc.warnings.push_back(w);
+  check_start_overlaps(sc);
   return sc;
 }
 
@@ -832,15 +882,9 @@ Scenario parse_scenario(std::string_view text, const std::string& source_name,
   return sc;
 }
 
-Scenario load_scenario(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in || fs::is_directory(path))
-    throw InputError("scenario file", quote(path), "cannot be opened for reading");
-  std::stringstream buffer;
-  buffer << in.rdbuf();
-  fs::path base = fs::path(path).parent_path();
-  if (base.empty()) base = ".";
-  return parse_scenario(buffer.str(), path, base.string());
+Scenario load_scenario(const std::string& path, const std::vector<std::string>& overrides) {
+  const tomlread::ScenarioText t = tomlread::read_scenario_text(path, overrides);
+  return parse_scenario(t.text, t.source, t.base_dir);
 }
 
 // ------------------------------------------------------------ TOML writing --

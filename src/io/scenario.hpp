@@ -152,11 +152,12 @@ struct Scenario {
   GravitySpec gravity;
   std::vector<StageSpec> stages;
   bool has_specimen = false; // a [specimen] table (for `centridem generate`; not used by run)
+  std::vector<std::string> warnings; // plausibility warnings (printed by the command)
 };
 
 // Reads, validates and resolves a scenario file, and reads its particle
 // file. Throws InputError (TOML syntax errors as FILE:LINE:COLUMN).
-Scenario load_scenario(const std::string& path);
+Scenario load_scenario(const std::string& path, const std::vector<std::string>& overrides = {});
 // The same from text; `source_name` names it in messages and `base_dir`
 // resolves relative paths.
 Scenario parse_scenario(std::string_view toml_text, const std::string& source_name,

@@ -282,15 +282,10 @@ ShearScenario parse_shear_scenario(std::string_view text, const std::string& sou
   return sc;
 }
 
-ShearScenario load_shear_scenario(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in || std::filesystem::is_directory(path))
-    throw InputError("scenario file", "\"" + path + "\"", "cannot be opened for reading");
-  std::stringstream buffer;
-  buffer << in.rdbuf();
-  std::filesystem::path base = std::filesystem::path(path).parent_path();
-  if (base.empty()) base = ".";
-  return parse_shear_scenario(buffer.str(), path, base.string());
+ShearScenario load_shear_scenario(const std::string& path,
+                                  const std::vector<std::string>& overrides) {
+  const tomlread::ScenarioText t = tomlread::read_scenario_text(path, overrides);
+  return parse_shear_scenario(t.text, t.source, t.base_dir);
 }
 
 std::string resolved_shear_toml(const ShearScenario& sc) {

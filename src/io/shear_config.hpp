@@ -45,7 +45,8 @@ struct ShearScenario {
 // messages and `base_dir` resolves relative paths (the sieve CSV).
 ShearScenario parse_shear_scenario(std::string_view toml_text, const std::string& source_name,
                                    const std::string& base_dir);
-ShearScenario load_shear_scenario(const std::string& path);
+ShearScenario load_shear_scenario(const std::string& path,
+                                  const std::vector<std::string>& overrides = {});
 
 // The resolved scenario as TOML (every default explicit); parsing it back
 // gives the same scenario.

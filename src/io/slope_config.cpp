@@ -104,7 +104,7 @@ BenchedSlope read_slope(const toml::table& t, const std::string& P, std::string&
   auto num_key = [&](std::string_view k, double& out, const std::string& allowed) {
     if (auto v = opt_number(t, P, k, positive, allowed)) out = *v;
   };
-  num_key("size_reduction_factor", b.size_reduction_factor, "DEM = model x s: in (0, 1] [-]");
+  num_key("size_reduction_factor", b.size_reduction_factor, "DEM = model x s: in [1e-4, 1] [-]");
   num_key("total_height_m", b.total_height_m, "model height floor to crest > 0 [m]");
   if (auto v = opt_number(t, P, "foundation_height_m", non_negative, "soil below the toe >= 0 [m]"))
     b.foundation_height_m = *v;
@@ -511,20 +511,13 @@ SlopeScenario parse_slope_scenario(std::string_view text, const std::string& sou
 
 SlopeScenario load_slope_scenario(const std::string& path,
                                   const std::vector<std::string>& overrides) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in || std::filesystem::is_directory(path))
-    throw InputError("scenario file", "\"" + path + "\"", "cannot be opened for reading");
-  std::stringstream buffer;
-  buffer << in.rdbuf();
-  std::filesystem::path base = std::filesystem::path(path).parent_path();
-  if (base.empty()) base = ".";
-  return parse_slope_scenario(tomlread::apply_overrides(buffer.str(), path, overrides),
-                              overrides.empty() ? path : path + " (with --set)", base.string());
+  const tomlread::ScenarioText t = tomlread::read_scenario_text(path, overrides);
+  return parse_slope_scenario(t.text, t.source, t.base_dir);
 }
 
 void apply_scale(SlopeScenario& sc, double s, const std::string& key) {
-  if (!(s > 0 && s <= 1))
-    throw InputError(key, fmt::format("{:g}", s), "a size reduction factor in (0, 1]");
+  if (!(s >= 1e-4 && s <= 1))
+    throw InputError(key, fmt::format("{:g}", s), "a size reduction factor in [1e-4, 1]");
   if (sc.attraction_divided_by_s) {
     sc.ball_ball.attraction_force_N /= sc.slope.size_reduction_factor;
     sc.attraction_divided_by_s = false;

@@ -132,8 +132,9 @@ using tomlread::join;
 using tomlread::missing;
 using tomlread::show;
 
-const Keys kSpecimenKeys = {"file", "gradation", "cutoff_m", "porosity", "density_kg_m3", "group",
-                            "seed", "brick",     "region",   "periodic", "relax"};
+const Keys kSpecimenKeys = {"file",          "gradation", "cutoff_m", "porosity",
+                            "density_kg_m3", "group",     "seed",     "brick",
+                            "region",        "periodic",  "relax",    "max_particles"};
 const Keys kGradationKeys = {"sieve_csv", "bins", "normalise"};
 const Keys kBinKeys = {"d_min_m", "d_max_m", "volume_fraction"};
 const Keys kBrickKeys = {"size_m", "file"};
@@ -274,15 +275,19 @@ SpecimenSpec parse_specimen(std::string_view text, const std::string& source_nam
   const std::string p = "specimen";
   const toml::node* node = root.get(p);
   if (!node)
-    missing(p, "a [specimen] table: a gradation, porosity, density_kg_m3, brick and region "
-               "(docs/specimens.md), or file = \"PATH\" (x y z r per line, SI)");
+    missing(p,
+            "a [specimen] table: a gradation, porosity, density_kg_m3, brick and region "
+            "(docs/specimens.md), or file = \"PATH\" (x y z r per line, SI)",
+            root);
   const toml::table& t = as_table(*node, p, "the specimen (docs/specimens.md)");
   check_keys(t, p, kSpecimenKeys);
 
-  if (const toml::node* n = t.get("density_kg_m3"))
+  if (const toml::node* n = t.get("density_kg_m3")) {
     s.density_kg_m3 =
         number(*n, p + ".density_kg_m3", positive, "the particle density > 0 [kg/m^3]");
-  else
+    if (auto w = tomlread::density_warning(p + ".density_kg_m3", s.density_kg_m3); !w.empty())
+      s.warnings.push_back(w);
+  } else
     missing(p + ".density_kg_m3", "the particle density > 0 [kg/m^3] (the paper: 2633)");
   if (const toml::node* n = t.get("group"))
     s.group = static_cast<int>(integer(
@@ -309,8 +314,8 @@ SpecimenSpec parse_specimen(std::string_view text, const std::string& source_nam
     s.source = SpecimenSpec::Source::file;
     s.file_path = resolve_file(*n, p + ".file", base_dir, s.file,
                                "a plain particle file, x y z r per line, SI");
-    for (std::string_view k :
-         {"gradation", "cutoff_m", "porosity", "seed", "brick", "periodic", "relax"})
+    for (std::string_view k : {"gradation", "cutoff_m", "porosity", "seed", "brick", "periodic",
+                               "relax", "max_particles"})
       if (const toml::node* other = t.get(k))
         fail(p + "." + std::string(k), *other,
              "not used with specimen.file (the particles come from the file): remove it, or "
@@ -367,6 +372,10 @@ SpecimenSpec parse_specimen(std::string_view text, const std::string& source_nam
     s.porosity = number(
         *n, p + ".porosity", [](double v) { return v > 0 && v < 1; },
         "target porosity ignoring overlaps, in (0, 1)");
+  if (const toml::node* n = t.get("max_particles"))
+    s.max_particles = number(
+        *n, p + ".max_particles", [](double v) { return v >= 1; },
+        "the most particles the region may hold: >= 1 (default 2e7)");
   if (const toml::node* n = t.get("seed"))
     s.seed = static_cast<std::uint64_t>(integer(
         *n, p + ".seed", [](long v) { return v >= 0; }, "an integer >= 0 (std::mt19937_64 seed)"));
@@ -418,15 +427,8 @@ SpecimenSpec parse_specimen(std::string_view text, const std::string& source_nam
 }
 
 SpecimenSpec load_specimen(const std::string& path, const std::vector<std::string>& overrides) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in || fs::is_directory(path))
-    throw InputError("scenario file", "\"" + path + "\"", "cannot be opened for reading");
-  std::stringstream buffer;
-  buffer << in.rdbuf();
-  fs::path base = fs::path(path).parent_path();
-  if (base.empty()) base = ".";
-  return parse_specimen(tomlread::apply_overrides(buffer.str(), path, overrides),
-                        overrides.empty() ? path : path + " (with --set)", base.string());
+  const tomlread::ScenarioText t = tomlread::read_scenario_text(path, overrides);
+  return parse_specimen(t.text, t.source, t.base_dir);
 }
 
 // ------------------------------------------------------------ TOML writing --
@@ -470,6 +472,10 @@ std::string resolved_specimen_toml(const SpecimenSpec& s) {
   o += fmt::format("cutoff_m = {}\n", num(s.cutoff_m));
   if (s.porosity > 0) o += fmt::format("porosity = {}\n", num(s.porosity));
   o += fmt::format("seed = {}\n", s.seed);
+  // Written only when changed: the resolved text is the key of cached bricks
+  // and foundations (procedures/foundation.cpp), which the default keeps.
+  if (s.max_particles != SpecimenSpec{}.max_particles)
+    o += fmt::format("max_particles = {}\n", num(s.max_particles));
   if (!s.brick_file.empty())
     o += fmt::format("brick = {{ file = {} }}\n", qt(abs_path(s.brick_file_path)));
   else

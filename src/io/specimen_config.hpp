@@ -95,14 +95,19 @@ struct SpecimenSpec {
   // The generated gradation (truncated, checked) is procedures/gsd.hpp's
   // resolve_gradation(spec).
 
-  double porosity = 0;         // target, ignoring overlaps (PFC `ball distribute`) [-]
-  double density_kg_m3 = 0;    // particle density [kg/m^3]
-  int group = 0;               // group number of every particle
-  std::uint64_t seed = 1;      // std::mt19937_64 seed
-  Vec3 brick_size_m;           // periodic cell size [m]
-  std::string brick_file;      // as written: a saved brick to tile instead of generating
-  std::string brick_file_path; // resolved
-  std::optional<Box> region;   // the box to fill (required for distribute) [m]
+  double porosity = 0;      // target, ignoring overlaps (PFC `ball distribute`) [-]
+  double density_kg_m3 = 0; // particle density [kg/m^3]
+  int group = 0;            // group number of every particle
+  std::uint64_t seed = 1;   // std::mt19937_64 seed
+  // Refuse a region that would hold more particles than this (estimated from
+  // the gradation and the porosity before anything is allocated): a region
+  // given in mm instead of m asks for about 1e9 times too many.
+  double max_particles = 2e7;
+  std::vector<std::string> warnings; // plausibility warnings (printed by the command)
+  Vec3 brick_size_m;                 // periodic cell size [m]
+  std::string brick_file;            // as written: a saved brick to tile instead of generating
+  std::string brick_file_path;       // resolved
+  std::optional<Box> region;         // the box to fill (required for distribute) [m]
   std::array<bool, 3> periodic{false, false, false}; // assembly periodic along x, y, z
   RelaxSpec relax;
 

@@ -5,7 +5,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <fmt/format.h>
+#include <fstream>
 #include <sstream>
 
 namespace centridem::tomlread {
@@ -85,6 +87,12 @@ void fail(const std::string& key, const toml::node& n, const std::string& allowe
 
 void missing(const std::string& key, const std::string& allowed) {
   throw InputError(key, "(missing)", "required: " + allowed);
+}
+
+void missing(const std::string& key, const std::string& allowed, const toml::node& within) {
+  const auto& path = within.source().path;
+  throw InputError(key, "(missing)",
+                   "required: " + allowed + (path ? " (in " + *path + ")" : std::string()));
 }
 
 double as_number(const toml::node& n, const std::string& key, const std::string& allowed) {
@@ -226,6 +234,27 @@ std::string apply_overrides(std::string_view toml_text, const std::string& sourc
   std::ostringstream out;
   out << toml::toml_formatter{root};
   return out.str();
+}
+
+std::string density_warning(const std::string& key, double density_kg_m3) {
+  if (density_kg_m3 >= 500 && density_kg_m3 <= 25000) return {};
+  return fmt::format("{} = {:g} kg/m^3 is outside 500-25000 kg/m^3, where grains are (sand "
+                     "2650, steel 7850): {}Everything is SI (kg/m^3); ignore this for density "
+                     "scaling on purpose",
+                     key, density_kg_m3, density_kg_m3 < 500 ? "in g/cm^3? " : "");
+}
+
+ScenarioText read_scenario_text(const std::string& path,
+                                const std::vector<std::string>& overrides) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in || std::filesystem::is_directory(path))
+    throw InputError("scenario file", quote(path), "cannot be opened for reading");
+  std::stringstream buffer;
+  buffer << in.rdbuf();
+  std::filesystem::path base = std::filesystem::path(path).parent_path();
+  if (base.empty()) base = ".";
+  return {apply_overrides(buffer.str(), path, overrides),
+          overrides.empty() ? path : path + " (with --set)", base.string()};
 }
 
 } // namespace centridem::tomlread

@@ -24,6 +24,10 @@ std::string show(const toml::node& n);  // a value as written
 std::string where(const toml::node& n); // " (at FILE:LINE:COLUMN)" or ""
 [[noreturn]] void fail(const std::string& key, const toml::node& n, const std::string& allowed);
 [[noreturn]] void missing(const std::string& key, const std::string& allowed);
+// The same for a key missing from `within` (the document, a table): the
+// message names the file, " (in FILE)", as a missing key has no line.
+[[noreturn]] void missing(const std::string& key, const std::string& allowed,
+                          const toml::node& within);
 // Rejects keys of t not in `allowed`, suggesting the nearest allowed one;
 // `hint(key)` may add advice for a key that belongs elsewhere.
 void check_keys(const toml::table& t, const std::string& path, const Keys& allowed,
@@ -45,6 +49,23 @@ std::string path_of(const std::string& table, std::string_view key); // "table.k
 // and the override for one that is not `KEY = VALUE`.
 std::string apply_overrides(std::string_view toml_text, const std::string& source_name,
                             const std::vector<std::string>& overrides);
+
+// A warning for a particle density outside where grains are (500 to 25,000
+// kg/m^3: ice 917, sand 2650, steel 7850, tungsten 19300), e.g. 2.633 written
+// in g/cm^3; "" when plausible. Not an error: density scaling is a deliberate
+// technique in quasi-static DEM.
+std::string density_warning(const std::string& key, double density_kg_m3);
+
+// A scenario file ready for its parser: the text with the overrides merged,
+// the name for messages ("PATH", or "PATH (with --set)") and the folder that
+// relative paths in it start from. Throws InputError naming the file when it
+// cannot be read.
+struct ScenarioText {
+  std::string text;
+  std::string source;
+  std::string base_dir;
+};
+ScenarioText read_scenario_text(const std::string& path, const std::vector<std::string>& overrides);
 
 // t[k] when present, checked with ok(value); the key in messages is path.k.
 template <class Ok>

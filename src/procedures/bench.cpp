@@ -1,14 +1,20 @@
 #include "procedures/bench.hpp"
 
+#include "core/errors.hpp"
 #include "core/world.hpp"
 #include "io/particle_file.hpp"
 #include "procedures/paper_material.hpp"
 
 #include <chrono>
+#include <filesystem>
 
 namespace centridem {
 
 BenchResult run_bench(const BenchOptions& o, int threads) {
+  std::error_code ec; // a name too long for the system is "does not exist", not an exception
+  if (!std::filesystem::is_regular_file(o.packing, ec))
+    throw InputError("--packing", "\"" + o.packing + "\"",
+                     "a particle file that exists (x y z r per line, SI)");
   const auto records = read_particle_file(o.packing);
   WorldSettings s;
   s.local_damping = paper::local_damping;

@@ -197,6 +197,7 @@ void build_foundation(World& world, const SlopeScenario& sc, const SlopeGeometry
     // Make the brick and cache it; the foundation is then always built from
     // the cached file, so a first trial and a later one start alike.
     const std::vector<GradationBin> bins = resolve_gradation(spec);
+    check_specimen_size(spec, bins);
     const Brick brick = make_brick(bins, spec.porosity, spec.brick_size_m, spec.density_kg_m3,
                                    spec.group, spec.seed, spec.relax, log, threads);
     make_directories(cache_dir);

@@ -46,8 +46,11 @@ BenchedSlope BenchedSlope::paper_higher_first_bench() {
 
 void validate(const BenchedSlope& s, const std::string& where) {
   auto k = [&](const std::string& name) { return where + "." + name; };
-  require(s.size_reduction_factor > 0 && s.size_reduction_factor <= 1, k("size_reduction_factor"),
-          s.size_reduction_factor, "must be in (0, 1] (DEM lengths = model lengths x s)");
+  // Below 1e-4 the DEM box of a metre-high model is under 0.1 mm and gravity n g / s beyond
+  // 1e5 g per g-level: a typo, not a model.
+  require(s.size_reduction_factor >= 1e-4 && s.size_reduction_factor <= 1,
+          k("size_reduction_factor"), s.size_reduction_factor,
+          "must be in [1e-4, 1] (DEM lengths = model lengths x s)");
   require(s.total_height_m > 0, k("total_height_m"), s.total_height_m, "must be > 0 [m]");
   require(s.foundation_height_m >= 0 && s.foundation_height_m < s.total_height_m,
           k("foundation_height_m"), s.foundation_height_m,

@@ -1,6 +1,7 @@
 #include "procedures/specimen.hpp"
 
 #include "core/errors.hpp"
+#include "io/output.hpp"
 #include "io/particle_file.hpp"
 #include "io/vtk.hpp"
 
@@ -639,10 +640,46 @@ std::string format_report(const SpecimenReport& r) {
 
 // -------------------------------------------------------------------- build --
 
+double estimated_specimen_particles(const SpecimenSpec& spec,
+                                    const std::vector<GradationBin>& bins) {
+  if (spec.source == SpecimenSpec::Source::file || !spec.region || bins.empty()) return 0;
+  const Vec3 e = spec.region->hi - spec.region->lo;
+  return (1 - spec.porosity) * e.x * e.y * e.z * particles_per_solid_volume(bins);
+}
+
+void check_specimen_size(const SpecimenSpec& spec, const std::vector<GradationBin>& bins) {
+  // 645 bytes per particle: what the engine holds per particle on the benchmark packing
+  // (docs/results/bench.md), contacts and neighbour lists included.
+  constexpr double kBytesPerParticle = 645;
+  if (spec.source != SpecimenSpec::Source::file && spec.brick_file.empty() && !bins.empty()) {
+    const Vec3 b = spec.brick_size_m;
+    const double nb = (1 - spec.porosity) * b.x * b.y * b.z * particles_per_solid_volume(bins);
+    if (!(nb <= spec.max_particles))
+      throw InputError(
+          "specimen.brick.size_m", fmt::format("[{:g}, {:g}, {:g}] m", b.x, b.y, b.z),
+          fmt::format("the brick would hold about {:.3g} particles (about {:.3g} GB), more than "
+                      "specimen.max_particles = {:g}. Lengths are in metres: a size written in "
+                      "mm asks for 1e9 times too many",
+                      nb, nb * kBytesPerParticle / 1e9, spec.max_particles));
+  }
+  const double n = estimated_specimen_particles(spec, bins);
+  if (!(n <= spec.max_particles)) {
+    const Vec3 e = spec.region->hi - spec.region->lo;
+    throw InputError(
+        "specimen.region", fmt::format("{:g} x {:g} x {:g} m", e.x, e.y, e.z),
+        fmt::format("would hold about {:.3g} particles (about {:.3g} GB), more than "
+                    "specimen.max_particles = {:g}. Lengths are in metres: a region written in "
+                    "mm asks for 1e9 times too many. For a model that big, raise the limit "
+                    "(--set specimen.max_particles=N)",
+                    n, n * kBytesPerParticle / 1e9, spec.max_particles));
+  }
+}
+
 BuiltSpecimen build_specimen(const SpecimenSpec& spec, World& world, const SpecimenLog& log,
                              int threads) {
   BuiltSpecimen out;
   const std::vector<GradationBin> bins = resolve_gradation(spec); // checks first
+  check_specimen_size(spec, bins);
   if (spec.source == SpecimenSpec::Source::file) {
     std::vector<ParticleRecord> recs;
     try {
@@ -723,10 +760,7 @@ BuiltSpecimen build_specimen(const SpecimenSpec& spec, World& world, const Speci
 
 void write_specimen_outputs(const World& world, const BuiltSpecimen& built,
                             const SpecimenSpec& spec, const std::string& dir) {
-  std::error_code ec;
-  fs::create_directories(dir, ec);
-  if (ec)
-    throw InputError("output folder", "\"" + dir + "\"", "cannot be created: " + ec.message());
+  make_directories(dir);
   const fs::path d(dir);
   write_particles_vtu(world, (d / "specimen.vtu").string());
   {

@@ -172,6 +172,16 @@ struct BuiltSpecimen {
 // Builds the specimen `spec` describes into `world` (fresh): a brick
 // (distributed and relaxed, or read) assembled to fill the region, or a
 // plain particle file. Resolves and checks the gradation before any work.
+// The number of particles the distributed specimen will hold, estimated from
+// the region, the porosity and the gradation (resolve_gradation) before
+// anything is allocated.
+double estimated_specimen_particles(const SpecimenSpec& spec,
+                                    const std::vector<GradationBin>& bins);
+// Throws InputError naming specimen.region when that estimate exceeds
+// specimen.max_particles, with the memory it would take and the hint that
+// lengths are in metres (a region in mm asks for 1e9 times too many).
+void check_specimen_size(const SpecimenSpec& spec, const std::vector<GradationBin>& bins);
+
 BuiltSpecimen build_specimen(const SpecimenSpec& spec, World& world, const SpecimenLog& log = {},
                              int threads = 0);
 

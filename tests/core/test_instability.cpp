@@ -9,9 +9,11 @@
 // (the dynamic overshoot reaches twice the static overlap) it must pass the
 // guard 0.5 R, so the run is stopped within the first half period
 // pi sqrt(m/kn) of the contact.
+#include "cli_test_util.hpp"
 #include "core/errors.hpp"
 #include "core/world.hpp"
 #include "physics/contact_properties.hpp"
+#include "scenario_fixtures.hpp"
 
 #include <cmath>
 #include <cstdlib>
@@ -179,6 +181,67 @@ steps = 100000
   EXPECT_NE(err.find("and a wall"), std::string::npos) << err;
   EXPECT_NE(err.find("Likely cause"), std::string::npos) << err;
   fs::remove_all(dir);
+}
+
+// The step named in "unstable at step N", or -1.
+long unstable_step(const std::string& out) {
+  const auto p = out.find("unstable at step ");
+  return p == std::string::npos ? -1 : std::atol(out.c_str() + p + 17);
+}
+
+// A small shear box (about 1,000 particles, the box of examples/shear_small.toml) whose contacts
+// turn 30,000 times softer when shearing starts (`--set` of shear.during_shear): under 100 kPa
+// the servo presses the grains into each other beyond the overlap guard. The run must stop with
+// exit 3 naming the particles, the step and the likely cause, keep the checkpoint written at the
+// start of shearing, and `--resume` from it must reach the same instability at the same step
+// (the checkpoint is intact and the run deterministic).
+TEST(Instability, ShearCommandExitsWith3AndKeepsAResumableCheckpoint) {
+  testutil::TempDir dir("centridem_unstable_shear");
+  std::ofstream(dir / "box.toml") << testutil::kSmallShearBox;
+  const std::string out = (dir / "out").string();
+  const auto first =
+      testutil::run_centridem({"shear", (dir / "box.toml").string(), "--out", out, "--set",
+                               "shear.during_shear={effective_modulus_Pa=1e4}"},
+                              dir / "first.log", 600);
+  ASSERT_EQ(first.code, 3) << first.output;
+  EXPECT_NE(first.output.find("centridem: unstable: "), std::string::npos) << first.output;
+  EXPECT_NE(first.output.find("Likely cause"), std::string::npos) << first.output;
+  EXPECT_NE(first.output.find("ball"), std::string::npos) << first.output;
+  const long step = unstable_step(first.output);
+  ASSERT_GT(step, 0) << first.output;
+  const fs::path ckpt = dir / "out" / "shear_100kPa.checkpoint.bin";
+  ASSERT_TRUE(fs::exists(ckpt)) << "the checkpoint written before the instability is gone";
+
+  const auto again = testutil::run_centridem({"shear", "--resume", out}, dir / "again.log", 600);
+  EXPECT_EQ(again.code, 3) << again.output;
+  EXPECT_NE(again.output.find("resuming"), std::string::npos) << again.output;
+  EXPECT_EQ(unstable_step(again.output), step) << again.output;
+}
+
+// The tiny slope of the kill-and-resume tests, its contacts made 300,000 times softer after the
+// cut (`--set trial.after_cut`, which replaces the file's after-cut patch): the slope sinks into
+// itself beyond the overlap guard. Exit 3 with the message, the trial's checkpoint (every 1,000
+// steps) kept, and `--resume` reaching the same instability at the same step.
+TEST(Instability, SlopeCommandExitsWith3AndKeepsAResumableCheckpoint) {
+  testutil::TempDir dir("centridem_unstable_slope");
+  std::ofstream(dir / "tiny.toml") << testutil::kTinySlope;
+  const std::string out = (dir / "out").string(), cache = (dir / "cache").string();
+  const auto first =
+      testutil::run_centridem({"slope", (dir / "tiny.toml").string(), "--out", out, "--cache",
+                               cache, "--set", "trial.after_cut={effective_modulus_Pa=1e3}"},
+                              dir / "first.log", 600);
+  ASSERT_EQ(first.code, 3) << first.output;
+  EXPECT_NE(first.output.find("centridem: unstable: "), std::string::npos) << first.output;
+  EXPECT_NE(first.output.find("Likely cause"), std::string::npos) << first.output;
+  const long step = unstable_step(first.output);
+  ASSERT_GT(step, 0) << first.output;
+  ASSERT_TRUE(fs::exists(dir / "out" / "trial_20g" / "checkpoint.bin"))
+      << "the checkpoint written before the instability is gone";
+
+  const auto again = testutil::run_centridem({"slope", "--resume", out}, dir / "again.log", 600);
+  EXPECT_EQ(again.code, 3) << again.output;
+  EXPECT_NE(again.output.find("resuming"), std::string::npos) << again.output;
+  EXPECT_EQ(unstable_step(again.output), step) << again.output;
 }
 
 } // namespace

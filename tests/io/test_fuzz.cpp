@@ -138,7 +138,7 @@ const std::set<std::string>& known_keys() {
       // [preparation] (shear and slope), [limit_equilibrium], [trial] rest_kinetic_ratio
       "preparation", "during_compaction", "compaction_g_level", "compaction_stress_Pa", "overfill",
       "limit_equilibrium", "cohesion_Pa", "friction_angle_deg", "bulk_density_kg_m3", "source",
-      "rest_kinetic_ratio"};
+      "rest_kinetic_ratio", "max_particles"};
   return keys;
 }
 

@@ -3,11 +3,14 @@
 // preparation that generate, shear and slope read alike); --set changes a
 // value and a bad one is refused with its key, exit 2; --scale is refused
 // where it has no meaning.
+#include "cli_test_util.hpp"
+
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
+#include <sstream>
 #include <string>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -42,21 +45,17 @@ breadth_m = 0.10
 g_levels = [50]
 )";
 
-struct CliRun {
-  int code = -1;
-  std::string output;
-};
+using centridem::testutil::CliRun;
 
-CliRun generate(const std::string& args, const fs::path& dir) {
-  const fs::path log = dir / "log.txt";
-  const std::string cmd =
-      std::string("'") + CENTRIDEM_BINARY + "' generate " + args + " > '" + log.string() + "' 2>&1";
-  const int status = std::system(cmd.c_str());
-  CliRun r;
-  if (WIFEXITED(status)) r.code = WEXITSTATUS(status);
-  std::ifstream in(log);
-  r.output.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-  return r;
+// `centridem generate ARGS` (ARGS split at spaces; quoted paths hold none).
+centridem::testutil::CliRun generate(const std::string& args, const fs::path& dir) {
+  std::vector<std::string> all = {"generate"};
+  std::istringstream in(args);
+  for (std::string w; in >> w;) {
+    if (w.size() >= 2 && w.front() == '\'' && w.back() == '\'') w = w.substr(1, w.size() - 2);
+    all.push_back(w);
+  }
+  return centridem::testutil::run_centridem(all, dir / "log.txt");
 }
 
 } // namespace

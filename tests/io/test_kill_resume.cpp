@@ -6,6 +6,9 @@
 //   - a checkpoint with one flipped byte is refused (exit 2, a clear message);
 //   - SIGINT: checkpoint, exit code 130 and a message naming --resume; the
 //     resumed run ends like the uninterrupted one.
+#include "cli_test_util.hpp"
+#include "scenario_fixtures.hpp"
+
 #include <chrono>
 #include <csignal>
 #include <cstdlib>
@@ -25,85 +28,16 @@ namespace fs = std::filesystem;
 
 namespace {
 
-const char* kScenario = R"(
-[specimen]
-gradation = { bins = [{ d_min_m = 0.2e-3, d_max_m = 0.3e-3, volume_fraction = 1.0 }] }
-porosity = 0.5
-density_kg_m3 = 2633.0
-seed = 3
-brick = { size_m = [2.2575e-3, 1.8e-3, 2.7e-3] }
-
-[contact.ball_ball]
-model = "arrlinear"
-effective_modulus_Pa = 300e6
-stiffness_ratio = 1.5
-friction = 0.5
-rolling_friction = 0.16
-attraction_force_N = 1.2e-4
-
-[slope]
-name = "tiny"
-size_reduction_factor = 0.015
-benches = [{ height_m = 0.075, width_m = 0.03 }, { height_m = 0.075 }]
-breadth_m = 0.12
-
-[trial]
-check_interval_steps = 500
-max_time_s = 0.03
-after_failure_time_s = 0.004
-checkpoint_interval_min = 0
-checkpoint_interval_steps = 1000
-at_cut = { friction = 0.0, rolling_friction = 0.0, attraction_force_N = 0.0 }
-after_cut = { friction = 0.0, rolling_friction = 0.0, attraction_force_N = 0.0 }
-
-[campaign]
-g_levels = [20]
-
-[output]
-frame_interval_steps = 10000
-vtk = false
-picture_width_px = 300
-)";
-
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-struct Child {
-  pid_t pid = -1;
-  fs::path log;
-};
+using centridem::testutil::Child;
+using centridem::testutil::kTinySlope;
+using centridem::testutil::slurp;
+using centridem::testutil::wait_for;
 
 // Starts `centridem slope ARGS` with stdout and stderr into `log`.
 Child start(const std::vector<std::string>& args, const fs::path& log) {
-  Child r;
-  r.log = log;
-  r.pid = ::fork();
-  if (r.pid == 0) {
-    std::FILE* f = std::freopen(log.c_str(), "w", stdout);
-    if (f) ::dup2(::fileno(stdout), 2);
-    std::vector<char*> argv;
-    std::string bin = CENTRIDEM_BINARY, slope = "slope";
-    argv.push_back(bin.data());
-    argv.push_back(slope.data());
-    std::vector<std::string> copy = args;
-    for (auto& a : copy) argv.push_back(a.data());
-    argv.push_back(nullptr);
-    ::setenv("OMP_NUM_THREADS", "1", 1);
-    ::execv(bin.c_str(), argv.data());
-    ::_exit(127);
-  }
-  return r;
-}
-
-// Exit code, or 128 + signal.
-int wait_for(const Child& r) {
-  int status = 0;
-  ::waitpid(r.pid, &status, 0);
-  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  std::vector<std::string> all = {"slope"};
+  all.insert(all.end(), args.begin(), args.end());
+  return centridem::testutil::start_centridem(all, log);
 }
 
 class KillResume : public ::testing::Test {
@@ -114,7 +48,7 @@ protected:
                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
     fs::remove_all(dir_);
     fs::create_directories(dir_);
-    std::ofstream(dir_ / "tiny.toml") << kScenario;
+    std::ofstream(dir_ / "tiny.toml") << kTinySlope;
     // The uninterrupted reference.
     const Child ref = start({(dir_ / "tiny.toml").string(), "--out", (dir_ / "ref").string(),
                              "--cache", (dir_ / "cache").string()},
@@ -177,7 +111,10 @@ TEST_F(KillResume, FlippedByteInTheCheckpointIsRefused) {
   const fs::path out = dir_ / "flip";
   const Child r = start(fresh(out), dir_ / "flip.log");
   const fs::path ck = out / "trial_20g" / "checkpoint.bin";
-  for (int i = 0; i < 200 && !fs::exists(ck); ++i)
+  // The first checkpoint comes 1,000 steps into the trial: a second or two in Release, much
+  // later under the sanitizers; wait for it (up to 5 minutes), then kill.
+  const auto give_up = std::chrono::steady_clock::now() + std::chrono::minutes(5);
+  while (!fs::exists(ck) && std::chrono::steady_clock::now() < give_up)
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   ::kill(r.pid, SIGKILL);
   wait_for(r);

@@ -13,6 +13,8 @@
 //   - --resume with a scenario, --out or --threads is refused (exit 2, naming
 //     it), as is a new run into a folder holding an unfinished one; --resume
 //     of a completed run does nothing.
+#include "cli_test_util.hpp"
+
 #include <chrono>
 #include <csignal>
 #include <cstdlib>
@@ -124,41 +126,15 @@ std::string grains() {
   return s;
 }
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-struct Child {
-  pid_t pid = -1;
-};
+using centridem::testutil::Child;
+using centridem::testutil::slurp;
+using centridem::testutil::wait_for;
 
 // Starts `centridem run ARGS` with stdout and stderr into `log`.
 Child start(const std::vector<std::string>& args, const fs::path& log) {
-  Child r;
-  r.pid = ::fork();
-  if (r.pid == 0) {
-    std::FILE* f = std::freopen(log.c_str(), "w", stdout);
-    if (f) ::dup2(::fileno(stdout), 2);
-    std::vector<std::string> all = {CENTRIDEM_BINARY, "run"};
-    all.insert(all.end(), args.begin(), args.end());
-    std::vector<char*> argv;
-    for (auto& a : all) argv.push_back(a.data());
-    argv.push_back(nullptr);
-    ::setenv("OMP_NUM_THREADS", "1", 1);
-    ::execv(argv[0], argv.data());
-    ::_exit(127);
-  }
-  return r;
-}
-
-// Exit code, or 128 + signal.
-int wait_for(const Child& r) {
-  int status = 0;
-  ::waitpid(r.pid, &status, 0);
-  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  std::vector<std::string> all = {"run"};
+  all.insert(all.end(), args.begin(), args.end());
+  return centridem::testutil::start_centridem(all, log);
 }
 
 int run_to_end(const std::vector<std::string>& args, const fs::path& log) {

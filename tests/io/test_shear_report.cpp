@@ -2,6 +2,8 @@
 // is now, with a finished pressure (in the fits) and an unfinished one (its
 // curve so far, read from the CSV the running test rewrites; not in the
 // fits), and a clear exit-2 error naming the line of a damaged CSV.
+#include "scenario_fixtures.hpp"
+
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -35,43 +37,17 @@ std::vector<std::string> lines_of(const fs::path& p) {
   return v;
 }
 
-// A reduced test (the CI box of examples/shear_small.toml, ~1,000 particles),
-// one pressure, sheared 0.15 mm: a few seconds.
-const char* kScenario = R"(
-description = "report test"
-[specimen]
-gradation = { bins = [{ d_min_m = 0.4e-3, d_max_m = 0.6e-3, volume_fraction = 1.0 }] }
-porosity = 0.40
-density_kg_m3 = 2633.0
-seed = 11
-brick = { size_m = [3e-3, 3e-3, 3e-3] }
-region = { lo_m = [0.0, 0.0, 0.0], hi_m = [6e-3, 6e-3, 3e-3] }
-[specimen.relax]
-contact = "scenario"
-[contact.ball_ball]
-model = "rrlinear"
-effective_modulus_Pa = 300e6
-stiffness_ratio = 1.5
-friction = 0.5
-rolling_friction = 0.16
-[shear]
-box = { length_m = 6e-3, width_m = 6e-3, height_m = 3e-3 }
-normal_stresses_Pa = [100e3]
-shear_rate_m_per_s = 0.02
-max_shear_displacement_m = 0.15e-3
-ball_wall = { model = "linear", effective_modulus_Pa = 1e9, stiffness_ratio = 1.5, friction = 0.0 }
-record_interval_steps = 500
-local_damping = 0.7
-threads = 1
-)";
+// A reduced test (tests/scenario_fixtures.hpp): the CI box, one pressure,
+// sheared 0.15 mm, a few seconds.
+using centridem::testutil::kSmallShearBox;
 
-// A fresh folder under the temporary directory holding kScenario as
+// A fresh folder under the temporary directory holding kSmallShearBox as
 // scenario_in.toml.
 fs::path fresh_dir_with_scenario(const std::string& name) {
   const fs::path dir = fs::temp_directory_path() / name;
   fs::remove_all(dir);
   fs::create_directories(dir);
-  std::ofstream(dir / "scenario_in.toml") << kScenario;
+  std::ofstream(dir / "scenario_in.toml") << kSmallShearBox;
   return dir;
 }
 

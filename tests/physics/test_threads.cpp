@@ -6,7 +6,8 @@
 // thread) falling in a box under gravity with adhesive, frictional contacts
 // (the paper's material), 300 steps with 1, 2 and 3 threads: positions,
 // velocities and spins per particle id, the clock, the contact counts and
-// the wall force are bit for bit equal, and the runs with 2 and 3 threads
+// the wall force, and the mean unbalanced-force ratio (whole and part) are
+// bit for bit equal, and the runs with 2 and 3 threads
 // did run on 2 and 3 threads (World::threads_used). Neighbour rebuilds
 // (re-sorting) must happen.
 #include "physics_test_util.hpp"
@@ -27,6 +28,7 @@ struct RunResult {
   std::size_t bb_contacts = 0, bw_contacts = 0;
   Vec3 floor_force;
   double time = 0;
+  double ratio = 0, upper_ratio = 0; // mean unbalanced-force ratio: all, and z > 2 mm
 };
 
 constexpr double r = 0.5e-3, spacing = 1.06e-3, L = 20 * spacing + 0.2e-3;
@@ -66,6 +68,9 @@ RunResult run(int threads) {
   out.bb_contacts = m.ball_ball_contacts;
   out.bw_contacts = m.ball_wall_contacts;
   out.floor_force = w.walls()[w.wall_index("floor")].force;
+  out.ratio = w.mean_unbalanced_force_ratio();
+  out.upper_ratio =
+      w.mean_unbalanced_force_ratio([&](std::size_t i) { return P.position[i].z > 2e-3; });
   return out;
 }
 
@@ -99,11 +104,17 @@ TEST(PhysicsThreads, OneTwoAndThreeThreadsAgreeBitForBit) {
     EXPECT_EQ(a.bb_contacts, b.bb_contacts);
     EXPECT_EQ(a.bw_contacts, b.bw_contacts);
     EXPECT_TRUE(same_bits(a.floor_force, b.floor_force));
+    // The ratio that decides when runs stop: the same bits (issue 18), over all and a part.
+    EXPECT_EQ(a.ratio, b.ratio);
+    EXPECT_EQ(a.upper_ratio, b.upper_ratio);
   }
   // Not vacuous: contacts active, re-sorting happened.
   EXPECT_GT(a.rebuilds, 2);
   EXPECT_GT(a.bb_contacts, 50u);
   EXPECT_GT(a.bw_contacts, 100u);
+  EXPECT_GT(a.ratio, 0.0);
+  EXPECT_GT(a.upper_ratio, 0.0);
+  EXPECT_NE(a.ratio, a.upper_ratio);
 }
 
 } // namespace

@@ -1,0 +1,220 @@
+#include "app/cli.hpp"
+
+#include "app/jobs.hpp"
+#include "io/scenario.hpp" // did_you_mean
+
+#include <CLI/CLI.hpp>
+#include <algorithm>
+#include <cctype>
+#include <cerrno>
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <fmt/format.h>
+#include <sstream>
+#include <string_view>
+#include <unistd.h>
+
+#ifndef CENTRIDEM_VERSION
+#define CENTRIDEM_VERSION "unknown"
+#endif
+#ifndef CENTRIDEM_BUILD_TYPE
+#define CENTRIDEM_BUILD_TYPE "unknown build"
+#endif
+
+namespace centridem::cli {
+
+CLI::Validator whole_number(long lo, long hi) {
+  const std::string allowed = fmt::format("a whole number from {} to {}", lo, hi);
+  return CLI::Validator(
+      [lo, hi, allowed](std::string& s) -> std::string {
+        long v = 0;
+        const char* end = s.data() + s.size();
+        const auto [p, ec] = std::from_chars(s.data(), end, v);
+        if (ec != std::errc() || p != end || v < lo || v > hi)
+          return fmt::format("{} is not allowed: {}", s.empty() ? "\"\"" : s, allowed);
+        return {};
+      },
+      allowed);
+}
+
+CLI::Validator positive_number(double hi) {
+  const std::string allowed =
+      hi > 0 ? fmt::format("a number > 0 and <= {:g}", hi) : std::string("a number > 0");
+  return CLI::Validator(
+      [hi, allowed](std::string& s) -> std::string {
+        errno = 0;
+        char* end = nullptr;
+        const double v = std::strtod(s.c_str(), &end);
+        const bool ok = !s.empty() && end == s.c_str() + s.size() && errno == 0 &&
+                        std::isfinite(v) && v > 0 && (hi <= 0 || v <= hi);
+        return ok ? std::string()
+                  : fmt::format("{} is not allowed: {}", s.empty() ? "\"\"" : s, allowed);
+      },
+      allowed);
+}
+
+CLI::Validator not_a_flag() {
+  return CLI::Validator(
+      [](std::string& s) -> std::string {
+        // "--name" or "-x"; negative numbers ("-1", "-inf") are values.
+        const bool flag =
+            (s.size() > 2 && s.starts_with("--")) ||
+            (s.size() == 2 && s[0] == '-' && std::isalpha(static_cast<unsigned char>(s[1])));
+        return flag ? fmt::format("\"{}\" is a flag, not a value: give the value right after the "
+                                  "option",
+                                  s)
+                    : std::string();
+      },
+      "");
+}
+
+CLI::Option* add_threads_option(CLI::App& cmd, int& threads, const std::string& what) {
+  return cmd.add_option("--threads", threads, what)->check(whole_number(0, kMaxThreads));
+}
+
+CLI::Option* add_jobs_option(CLI::App& cmd, int& jobs, const std::string& what) {
+  return cmd.add_option("--jobs", jobs, what)->check(whole_number(1, kMaxJobs));
+}
+
+CLI::Option* add_set_option(CLI::App& cmd, std::vector<std::string>& set) {
+  return cmd.add_option("--set", set,
+                        "override a scenario key, KEY=VALUE in TOML syntax (repeatable), e.g. "
+                        "--set contact.ball_ball.friction=0.3; checked like the file's keys and "
+                        "recorded in the resolved scenario");
+}
+
+CLI::Option* add_check_flag(CLI::App& cmd, bool& check) {
+  return cmd.add_flag("--check", check,
+                      "check the scenario and the flags, print the resolved scenario (TOML) and "
+                      "stop without running");
+}
+
+void run_subcommand(const std::function<int()>& work, const std::function<void()>& on_interrupt) {
+  int rc = 0;
+  try {
+    rc = work();
+  } catch (...) {
+    rc = report_current_exception("");
+    if (rc > 128 && on_interrupt) on_interrupt();
+  }
+  if (rc != 0) {
+    std::fflush(stdout);
+    std::fflush(stderr);
+    std::exit(rc);
+  }
+}
+
+namespace {
+
+std::vector<std::string> subcommand_names(const CLI::App& app) {
+  std::vector<std::string> names;
+  for (const CLI::App* sub : app.get_subcommands([](const CLI::App*) { return true; }))
+    names.push_back(sub->get_name());
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+std::string listed(const std::vector<std::string>& names) {
+  std::string s;
+  for (std::size_t i = 0; i < names.size(); ++i)
+    s += (i == 0 ? "" : i + 1 == names.size() ? " or " : ", ") + names[i];
+  return s;
+}
+
+std::string nearest(std::string_view word, const std::vector<std::string>& names) {
+  std::vector<std::string_view> v(names.begin(), names.end());
+  return did_you_mean(word, v);
+}
+
+// The subcommand that was being parsed, if any.
+const CLI::App* chosen(const CLI::App* app) {
+  for (const CLI::App* sub : app->get_subcommands())
+    if (sub) return sub;
+  return nullptr;
+}
+
+// "--thread": "; did you mean --threads?" among the subcommand's long flags.
+std::string flag_hint(const CLI::App* sub, std::string_view arg) {
+  if (!sub || !arg.starts_with("--")) return {};
+  std::string name(arg.substr(2));
+  if (const auto eq = name.find('='); eq != std::string::npos) name.resize(eq);
+  std::vector<std::string> flags;
+  for (const CLI::Option* opt : sub->get_options())
+    for (const std::string& l : opt->get_lnames()) flags.push_back(l);
+  const std::string best = nearest(name, flags);
+  return best.empty() ? std::string() : "; did you mean --" + best + "?";
+}
+
+} // namespace
+
+void set_error_messages(CLI::App& app) {
+  for (CLI::App* sub : app.get_subcommands([](const CLI::App*) { return true; }))
+    for (CLI::Option* opt : sub->get_options())
+      if (opt->get_items_expected_max() > 0) opt->check(not_a_flag());
+  app.failure_message([](const CLI::App* top, const CLI::Error& e) -> std::string {
+    const CLI::App* sub = chosen(top);
+    const std::string help =
+        sub ? fmt::format("`centridem {} --help` lists its options", sub->get_name())
+            : std::string("`centridem --help` lists the subcommands");
+    std::string what = e.what();
+    if (e.get_name() == "RequiredError" && what.find("subcommand") != std::string::npos && !sub)
+      return fmt::format("centridem: error: give a subcommand: {} ({})\n",
+                         listed(subcommand_names(*top)), help);
+    if (dynamic_cast<const CLI::ExtrasError*>(&e) != nullptr) {
+      // "The following arguments were not expected: 1 --thread" (CLI11 lists
+      // them last first): back in the order typed, the first flag hinted at.
+      const auto colon = what.find(": ");
+      std::vector<std::string> words;
+      std::istringstream in(colon == std::string::npos ? what : what.substr(colon + 2));
+      for (std::string w; in >> w;) words.insert(words.begin(), w);
+      std::string typed, flag;
+      for (const std::string& w : words) {
+        typed += (typed.empty() ? "" : " ") + w;
+        if (flag.empty() && w.starts_with("-")) flag = w;
+      }
+      return fmt::format("centridem: error: \"{}\" not expected here{} ({})\n", typed,
+                         flag_hint(sub, flag), help);
+    }
+    return fmt::format("centridem: error: {} ({})\n", what, help);
+  });
+}
+
+int check_subcommand(const CLI::App& app, int argc, char** argv) {
+  if (argc < 2) return 0;
+  const std::string_view word = argv[1];
+  if (word.empty() || word.front() == '-') return 0;
+  const std::vector<std::string> names = subcommand_names(app);
+  for (const std::string& n : names)
+    if (n == word) return 0;
+  const std::string best = nearest(word, names);
+  fmt::print(stderr, "centridem: error: unknown subcommand \"{}\"{}; the subcommands are {}\n",
+             word, best.empty() ? "" : " (did you mean \"" + best + "\"?)", listed(names));
+  return 2;
+}
+
+void use_passive_openmp_wait(char** argv) {
+  if (std::getenv("OMP_WAIT_POLICY") != nullptr) return;
+  if (::setenv("OMP_WAIT_POLICY", "passive", 1) != 0) return;
+  ::execv("/proc/self/exe", argv);
+  // Not restarted (no /proc): go on with OpenMP's default policy.
+}
+
+void print_warnings(const std::vector<std::string>& warnings) {
+  for (const std::string& w : warnings) fmt::print(stderr, "centridem: warning: {}\n", w);
+  std::fflush(stderr);
+}
+
+std::string version_string() {
+  return fmt::format("centridem {} ({}, {} {})", CENTRIDEM_VERSION, CENTRIDEM_BUILD_TYPE,
+#if defined(__clang__)
+                     "Clang",
+#else
+                     "GCC",
+#endif
+                     __VERSION__);
+}
+
+} // namespace centridem::cli

@@ -1,0 +1,254 @@
+// The command line a user meets first (issue 19): --version; an unknown subcommand or flag
+// refused with the nearest real one; ranges written as people write them; an output folder that
+// is a file refused with exit 2; `--set KEY=VALUE` and `--check` on run, generate, shear and
+// slope (the value lands in the resolved scenario, a misspelt key is named); and OpenMP's passive
+// wait policy set by the program unless the environment sets one.
+#include "cli_test_util.hpp"
+
+#include <filesystem>
+#include <fstream>
+#include <gtest/gtest.h>
+#include <string>
+#include <vector>
+
+namespace {
+
+namespace fs = std::filesystem;
+using centridem::testutil::run_centridem;
+using centridem::testutil::slurp;
+using centridem::testutil::TempDir;
+
+std::string ex(const std::string& rel) {
+  return (fs::path(CENTRIDEM_SOURCE_DIR) / "examples" / rel).string();
+}
+
+// Balls from p.xyzr on a floor, beside a wall at x = -2 mm, 20 steps at 1 g.
+constexpr const char* kBallsOnAFloor = R"(
+[simulation]
+threads = 1
+progress_interval_s = 0
+[particles]
+file = "p.xyzr"
+density_kg_m3 = 2633
+[contact.ball_ball]
+model = "linear"
+effective_modulus_Pa = 1e8
+[contact.ball_wall]
+model = "linear"
+effective_modulus_Pa = 1e8
+[gravity]
+g_level = 1
+[[walls]]
+name = "floor"
+type = "plane"
+point_m = [0, 0, 0]
+normal = [0, 0, 1]
+[[walls]]
+name = "left"
+type = "plane"
+point_m = [-0.002, 0, 0]
+normal = [1, 0, 0]
+[[stages]]
+name = "sit"
+steps = 20
+)";
+
+bool has(const std::string& text, const std::string& what) {
+  return text.find(what) != std::string::npos;
+}
+
+TEST(CommandLine, VersionIsPrinted) {
+  TempDir dir("centridem_cli_version");
+  const auto r = run_centridem({"--version"}, dir / "log");
+  EXPECT_EQ(r.code, 0) << r.output;
+  EXPECT_EQ(r.output.rfind("centridem 0.", 0), 0u) << r.output;
+}
+
+TEST(CommandLine, UnknownSubcommandOrFlagIsRefusedWithTheNearest) {
+  TempDir dir("centridem_cli_unknown");
+  const auto sub = run_centridem({"slop", "x.toml"}, dir / "log");
+  EXPECT_EQ(sub.code, 2) << sub.output;
+  EXPECT_TRUE(has(sub.output, "unknown subcommand \"slop\" (did you mean \"slope\"?)"))
+      << sub.output;
+
+  const auto none = run_centridem({}, dir / "log");
+  EXPECT_EQ(none.code, 2) << none.output;
+  EXPECT_TRUE(has(none.output, "give a subcommand: ")) << none.output;
+  EXPECT_TRUE(has(none.output, "shear")) << none.output;
+
+  const auto flag = run_centridem({"run", ex("demo_settle.toml"), "--thread", "1"}, dir / "log");
+  EXPECT_EQ(flag.code, 2) << flag.output;
+  EXPECT_TRUE(has(flag.output, "--thread")) << flag.output;
+  EXPECT_TRUE(has(flag.output, "did you mean --threads?")) << flag.output;
+}
+
+TEST(CommandLine, RangesReadAsPeopleWriteThem) {
+  TempDir dir("centridem_cli_ranges");
+  const auto t = run_centridem({"run", ex("demo_settle.toml"), "--threads", "-1"}, dir / "log");
+  EXPECT_EQ(t.code, 2) << t.output;
+  EXPECT_TRUE(has(t.output, "--threads: -1 is not allowed: a whole number from 0 to 1024"))
+      << t.output;
+  EXPECT_LT(t.output.size(), 300u) << "no 309-digit bounds: " << t.output;
+  const auto p =
+      run_centridem({"slope", ex("demo_slope.toml"), "--progress", "nan", "--check"}, dir / "log");
+  EXPECT_EQ(p.code, 2) << p.output;
+  EXPECT_TRUE(has(p.output, "--progress: nan is not allowed: a number > 0")) << p.output;
+  const auto s =
+      run_centridem({"slope", ex("demo_slope.toml"), "--scale", "2", "--check"}, dir / "log");
+  EXPECT_EQ(s.code, 2) << s.output;
+  EXPECT_TRUE(has(s.output, "--scale: 2 is not allowed: a number > 0 and <= 1")) << s.output;
+}
+
+TEST(CommandLine, AnOutputFolderThatIsAFileIsBadInput) {
+  TempDir dir("centridem_cli_outfile");
+  std::ofstream(dir / "taken") << "a file\n";
+  const std::string taken = (dir / "taken").string();
+  for (const std::vector<std::string>& args :
+       {std::vector<std::string>{"shear", ex("shear_small.toml"), "--out", taken},
+        std::vector<std::string>{"shear", ex("shear_small.toml"), "--out", taken, "--check"},
+        std::vector<std::string>{"slope", ex("demo_slope.toml"), "--out", taken, "--check"},
+        std::vector<std::string>{"generate", ex("specimens/paper_shear_box.toml"), "--out", taken,
+                                 "--check"},
+        std::vector<std::string>{"run", ex("demo_settle.toml"), "--out", taken, "--check"}}) {
+    const auto r = run_centridem(args, dir / "log", 120);
+    EXPECT_EQ(r.code, 2) << args[0] << ": " << r.output;
+    EXPECT_TRUE(has(r.output, taken)) << r.output;
+  }
+}
+
+// --set and --check on each subcommand that reads a scenario: the value is in the resolved
+// scenario printed by --check, and a misspelt key is refused naming it and the nearest key.
+TEST(CommandLine, SetAndCheckOnEverySubcommand) {
+  TempDir dir("centridem_cli_set");
+  struct Sub {
+    std::string name, scenario, set, expect, bad_key;
+  };
+  const std::vector<Sub> subs = {{"run", ex("demo_settle.toml"), "simulation.local_damping=0.35",
+                                  "local_damping = 0.35", "simulation.local_dampin"},
+                                 {"generate", ex("specimens/paper_shear_box.toml"),
+                                  "specimen.seed=77", "seed = 77", "specimen.sed"},
+                                 {"shear", ex("shear_small.toml"),
+                                  "contact.ball_ball.friction=0.31", "friction = 0.31",
+                                  "contact.ball_ball.frictio"},
+                                 {"slope", ex("demo_slope.toml"), "trial.min_time_s=0.012",
+                                  "min_time_s = 0.012", "trial.min_time"}};
+  for (const Sub& s : subs) {
+    const auto ok =
+        run_centridem({s.name, s.scenario, "--set", s.set, "--check"}, dir / "log", 120);
+    EXPECT_EQ(ok.code, 0) << s.name << ": " << ok.output;
+    EXPECT_TRUE(has(ok.output, s.expect)) << s.name << ": " << ok.output;
+    EXPECT_TRUE(has(ok.output, "nothing")) << s.name << ": --check says it ran nothing";
+    const auto bad =
+        run_centridem({s.name, s.scenario, "--set", s.bad_key + "=1", "--check"}, dir / "log", 120);
+    EXPECT_EQ(bad.code, 2) << s.name << ": " << bad.output;
+    const std::string last = s.bad_key.substr(s.bad_key.rfind('.') + 1);
+    EXPECT_TRUE(has(bad.output, last)) << s.name << ": " << bad.output;
+    EXPECT_TRUE(has(bad.output, "did you mean")) << s.name << ": " << bad.output;
+  }
+}
+
+// A g-level that overflows n g / s (found by the fuzz of issue 17: 1e308 gave NaN positions) is
+// refused with its key, as is a size reduction factor that makes a slope's gravity absurd.
+TEST(CommandLine, GravityBeyondAnyCentrifugeIsRefused) {
+  TempDir dir("centridem_cli_gravity");
+  const auto g = run_centridem(
+      {"run", ex("demo_settle.toml"), "--set", "gravity.g_level=1e308", "--check"}, dir / "log");
+  EXPECT_EQ(g.code, 2) << g.output;
+  EXPECT_TRUE(has(g.output, "gravity.g_level")) << g.output;
+  EXPECT_TRUE(has(g.output, "(1e6 g)")) << g.output;
+  const auto ok = run_centridem(
+      {"run", ex("demo_settle.toml"), "--set", "gravity.g_level=1e5", "--check"}, dir / "log");
+  EXPECT_EQ(ok.code, 0) << ok.output;
+  const auto s = run_centridem(
+      {"slope", ex("demo_slope.toml"), "--set", "slope.size_reduction_factor=1e-300", "--check"},
+      dir / "log");
+  EXPECT_EQ(s.code, 2) << s.output;
+  EXPECT_TRUE(has(s.output, "slope.size_reduction_factor")) << s.output;
+}
+
+// `run --set` on a real run: the value changes the run and is recorded in its resolved scenario.
+TEST(CommandLine, RunSetIsRecordedInTheResolvedScenario) {
+  TempDir dir("centridem_cli_run_set");
+  std::ofstream(dir / "p.xyzr") << "0 0 0.0005 0.0005\n";
+  std::ofstream(dir / "s.toml") << kBallsOnAFloor;
+  const auto r = run_centridem({"run", (dir / "s.toml").string(), "--out", (dir / "out").string(),
+                                "--set", "gravity.g_level=7"},
+                               dir / "log", 120);
+  ASSERT_EQ(r.code, 0) << r.output;
+  const std::string resolved = slurp(dir / "out" / "scenario.resolved.toml");
+  EXPECT_TRUE(has(resolved, "g_level = 7")) << resolved;
+}
+
+// Sanity before work (issue 19): a particle line given twice, a particle file written in mm
+// (positions and radii: through the walls placed in m; radii alone: every neighbour overlapped),
+// and a specimen region in mm are refused with exit 2 and a message that says what is wrong and
+// hints at the unit; a density written in g/cm^3 is a warning (density scaling is legitimate).
+TEST(CommandLine, MistakesOfUnitAndDuplicatesAreCaughtBeforeWork) {
+  TempDir dir("centridem_cli_sanity");
+
+  std::ofstream(dir / "s.toml") << kBallsOnAFloor;
+  auto check = [&](const std::string& particles) {
+    std::ofstream(dir / "p.xyzr") << particles;
+    return run_centridem({"run", (dir / "s.toml").string(), "--check"}, dir / "log", 60);
+  };
+  // Three balls of 0.5 mm on the floor, 1.5 mm apart: accepted.
+  const std::string good = "0 0 0.0005 0.0005\n0.0015 0 0.0005 0.0005\n0.003 0 0.0005 0.0005\n";
+  EXPECT_EQ(check(good).code, 0);
+  // The first line again at the end: both lines named.
+  const auto dup = check(good + "0 0 0.0005 0.0005\n");
+  EXPECT_EQ(dup.code, 2) << dup.output;
+  EXPECT_TRUE(has(dup.output, "p.xyzr:1 and line 4")) << dup.output;
+  EXPECT_TRUE(has(dup.output, "a line given twice")) << dup.output;
+  // Everything in mm: the first ball sits 0.5 m up and 0.5 m wide, through the left wall.
+  const auto mm = check("0 0 0.5 0.5\n1.5 0 0.5 0.5\n3 0 0.5 0.5\n");
+  EXPECT_EQ(mm.code, 2) << mm.output;
+  EXPECT_TRUE(has(mm.output, "wall \"left\"")) << mm.output;
+  EXPECT_TRUE(has(mm.output, "mm")) << mm.output;
+  // Radii alone in mm: neighbours 1.5 mm apart with radii of 0.5 m.
+  const auto radii = check("0 0 0.6 0.5\n0.0015 0 0.6 0.5\n");
+  EXPECT_EQ(radii.code, 2) << radii.output;
+  EXPECT_TRUE(has(radii.output, "radii written in mm")) << radii.output;
+  // A density in g/cm^3: a warning, and the check goes on.
+  std::ofstream(dir / "p.xyzr") << good;
+  const auto density = run_centridem(
+      {"run", (dir / "s.toml").string(), "--set", "particles.density_kg_m3=2.633", "--check"},
+      dir / "log", 60);
+  EXPECT_EQ(density.code, 0) << density.output;
+  EXPECT_TRUE(has(density.output, "centridem: warning: particles.density_kg_m3 = 2.633"))
+      << density.output;
+  EXPECT_TRUE(has(density.output, "g/cm^3")) << density.output;
+  // A shear box's region in mm: about 1e12 particles, refused before anything is allocated.
+  const auto region =
+      run_centridem({"generate", ex("shear_small.toml"), "--set",
+                     "specimen.region={lo_m=[0,0,0],hi_m=[6,6,3]}", "--out", (dir / "g").string()},
+                    dir / "log", 60);
+  EXPECT_EQ(region.code, 2) << region.output;
+  EXPECT_TRUE(has(region.output, "specimen.region = 6 x 6 x 3 m")) << region.output;
+  EXPECT_TRUE(has(region.output, "mm")) << region.output;
+  EXPECT_TRUE(has(region.output, "specimen.max_particles")) << region.output;
+  EXPECT_FALSE(fs::exists(dir / "g" / "specimen.vtu"));
+}
+
+// The last GOMP_SPINCOUNT that libgomp prints with OMP_DISPLAY_ENV=verbose: "0" under the
+// passive policy, 300000 (or more under "active") when the threads spin.
+std::string spin_count(const std::string& out) {
+  const auto p = out.rfind("GOMP_SPINCOUNT = '");
+  if (p == std::string::npos) return "(not printed)";
+  const auto b = p + 18;
+  return out.substr(b, out.find('\'', b) - b);
+}
+
+TEST(CommandLine, OpenMPWaitsPassivelyUnlessTheEnvironmentSaysOtherwise) {
+  TempDir dir("centridem_cli_wait");
+  const auto def =
+      run_centridem({"--version"}, dir / "log", 60, {"OMP_WAIT_POLICY", "OMP_DISPLAY_ENV=verbose"});
+  EXPECT_EQ(def.code, 0) << def.output;
+  EXPECT_EQ(spin_count(def.output), "0") << def.output;
+  const auto active = run_centridem({"--version"}, dir / "log", 60,
+                                    {"OMP_WAIT_POLICY=active", "OMP_DISPLAY_ENV=verbose"});
+  EXPECT_EQ(active.code, 0) << active.output;
+  EXPECT_NE(spin_count(active.output), "0") << active.output;
+  EXPECT_NE(spin_count(active.output), "(not printed)") << active.output;
+}
+
+} // namespace
