@@ -128,6 +128,28 @@ ContactProperties graded(ContactProperties c, double factor) {
 
 } // namespace
 
+std::size_t grade_attraction_by_height(World& world, const ContactProperties& base,
+                                       const MoistureSpec& moisture, double height_m) {
+  const int nb = moisture.bands;
+  const double H = height_m;
+  const auto& P = world.particles();
+  std::size_t changed = 0;
+  for (int b = 0; b < nb; ++b) {
+    const double z0 = b == 0 ? -INFINITY : H * b / nb;
+    const double z1 = b == nb - 1 ? INFINITY : H * (b + 1) / nb;
+    const double zc = H * (b + 0.5) / nb;
+    const double factor =
+        moisture.bottom_factor + (moisture.top_factor - moisture.bottom_factor) * zc / H;
+    changed += world.modify_ball_ball_contacts(
+        [&](std::size_t i, std::size_t j) {
+          const double z = 0.5 * (P.position[i].z + P.position[j].z);
+          return z >= z0 && z < z1;
+        },
+        [&](ContactProperties& c) { c = graded(base, factor); });
+  }
+  return changed;
+}
+
 const LevelResult* SlopeTrialResult::first_failure() const {
   for (const LevelResult& l : levels)
     if (l.report.state == SlopeState::failed) return &l;
@@ -286,22 +308,7 @@ SlopeTrialResult run_slope_trial(const SlopeScenario& sc, const SlopeTrialPlan& 
     pr.excavated = geometry.excavate(world);
     const ContactProperties at_cut = sc.soil_at_cut();
     if (sc.moisture.enabled) {
-      const int nb = sc.moisture.bands;
-      const double H = geometry.height();
-      const auto& P = world.particles();
-      for (int b = 0; b < nb; ++b) {
-        const double z0 = b == 0 ? -INFINITY : H * b / nb;
-        const double z1 = b == nb - 1 ? INFINITY : H * (b + 1) / nb;
-        const double zc = H * (b + 0.5) / nb;
-        const double factor = sc.moisture.bottom_factor +
-                              (sc.moisture.top_factor - sc.moisture.bottom_factor) * zc / H;
-        world.modify_ball_ball_contacts(
-            [&](std::size_t i, std::size_t j) {
-              const double z = 0.5 * (P.position[i].z + P.position[j].z);
-              return z >= z0 && z < z1;
-            },
-            [&](ContactProperties& c) { c = graded(at_cut, factor); });
-      }
+      grade_attraction_by_height(world, at_cut, sc.moisture, geometry.height());
     } else if (!sc.trial.at_cut.empty()) {
       world.modify_ball_ball_contacts([](std::size_t, std::size_t) { return true; },
                                       [&](ContactProperties& c) { c = at_cut; });

@@ -83,6 +83,15 @@ struct SlopeTrialOptions {
 
 // The body field of a trial at g-level n (uniform n g / s, or the radial
 // centrifuge field with the chamber's middle under the axis).
+// The moisture grading of F0 at the cut ([moisture], Tao et al. section 3.3:
+// drier near the crest): the model's height H in `bands` equal bands, each
+// ball-ball contact (by the mean height of its two centres) gets `base` with
+// F0 x (bottom + (top - bottom) z_c / H), z_c the middle of its band; the
+// lowest and highest bands reach below 0 and above H. Returns the contacts
+// changed.
+std::size_t grade_attraction_by_height(World& world, const ContactProperties& base,
+                                       const MoistureSpec& moisture, double height_m);
+
 BodyField slope_field(const SlopeScenario& sc, const SlopeGeometry& geometry, double g_level);
 
 // Runs (or resumes) the trial in options.dir. Throws InputError for bad
