@@ -16,7 +16,9 @@ ASAN_DIR    := build-asan
 # (DirectShear.StoppedAndResumed..., DirectShear.HumidSpecimen..., ShearReport.Finished...,
 # Instability.ShearCommand...; SlopeTrialTest.*, KillResume.*). Measured under the sanitizers
 # (docs/results/tests.md): 470, 205, 196, 197 and 170 s of the 3,136 s that all the rest took.
-ASAN_EXCLUDE := ^(Preparation\.FoundationAndShearBoxPreparedAtOneStressAreEquallyDense|Foundation\.PreparedUnderGravityIsHomogeneousTrimmedToTheDesignAndCached|DirectShear\.ServoHoldsStressAndFrictionRaisesStrength|DirectShear\.FrictionlessConsolidationPacksDenserThenShearsAsTheMaterial|ShearReport\.RunsAreListedByRisingPressureAndAPressureGivenTwiceIsRefused|FailureMonitor\.FrictionlessSlopeFails|FailureMonitor\.GentleFrictionalSlopeIsStable)$$
+# Also left out: SlopeTrialTest.OneTimeAxis... (a failing slope trial with ParaView frames); the
+# same frames, sliding flag and walls are written under the sanitizers by Render.Reproduces...
+ASAN_EXCLUDE := ^(SlopeTrialTest\.OneTimeAxisInTheLogThePicturesAndTheParaViewSeries|Preparation\.FoundationAndShearBoxPreparedAtOneStressAreEquallyDense|Foundation\.PreparedUnderGravityIsHomogeneousTrimmedToTheDesignAndCached|DirectShear\.ServoHoldsStressAndFrictionRaisesStrength|DirectShear\.FrictionlessConsolidationPacksDenserThenShearsAsTheMaterial|ShearReport\.RunsAreListedByRisingPressureAndAPressureGivenTwiceIsRefused|FailureMonitor\.FrictionlessSlopeFails|FailureMonitor\.GentleFrictionalSlopeIsStable)$$
 JOBS        ?= $(shell nproc 2>/dev/null || echo 2)
 CENTRIDEM   := ./$(BUILD_DIR)/centridem
 # Re-run scripts/setup.sh only when it changes (or after `make clean`).

@@ -1,4 +1,4 @@
-#include "core/world.hpp"
+#include "engine/world.hpp"
 
 #include <gtest/gtest.h>
 

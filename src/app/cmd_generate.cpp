@@ -2,8 +2,8 @@
 
 #include "app/cli.hpp"
 
-#include "core/errors.hpp"
-#include "core/world.hpp"
+#include "base/errors.hpp"
+#include "engine/world.hpp"
 #include "io/checkpoint.hpp"
 #include "io/output.hpp"
 #include "io/particle_file.hpp"

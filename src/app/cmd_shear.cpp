@@ -3,9 +3,9 @@
 #include "app/cli.hpp"
 #include "app/jobs.hpp"
 
-#include "core/errors.hpp"
-#include "core/interrupt.hpp"
-#include "core/world.hpp"
+#include "base/errors.hpp"
+#include "base/interrupt.hpp"
+#include "engine/world.hpp"
 #include "io/csv.hpp"
 #include "io/output.hpp"
 #include "io/plot.hpp"

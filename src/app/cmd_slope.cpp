@@ -2,8 +2,8 @@
 
 #include "app/cli.hpp"
 #include "app/jobs.hpp"
-#include "core/errors.hpp"
-#include "core/interrupt.hpp"
+#include "base/errors.hpp"
+#include "base/interrupt.hpp"
 #include "io/output.hpp"
 #include "io/plot.hpp"
 #include "io/slope_config.hpp"
@@ -670,8 +670,21 @@ int run_slope_command(const SlopeCommandOptions& opt) {
         limit_equilibrium["friction_angle_deg"].get<double>(),
         limit_equilibrium["bulk_density_kg_m3"].get<double>(),
         sc.limit_equilibrium.source.empty() ? "" : " (" + sc.limit_equilibrium.source + ")");
-  md += "\nPictures: `<trial>/pictures/frame_NNNN.png`; ParaView: `<trial>/slope.pvd`; the "
-        "g-level plot: `g_levels.png`.\n";
+  {
+    std::vector<std::string> per_trial;
+    for (const TrialOutcome& t : trials)
+      if (t.done())
+        per_trial.push_back(fmt::format("{}: {}", t.g > 0 ? fmt::format("{:g} g", t.g) : "schedule",
+                                        format_duration(t.result["wall_seconds"].get<double>())));
+    md += fmt::format("\nWall time: {} for this command ({} trial(s) at once{}{}).\n",
+                      format_duration(seconds_since(t0)), cs.jobs,
+                      per_trial.empty() ? "" : "; each trial's own: ",
+                      fmt::format("{}", fmt::join(per_trial, ", ")));
+  }
+  md += "\nPictures: `<trial>/pictures/frame_NNNN.png` (the frames' times after the cut in "
+        "`<trial>/frames.csv`); ParaView: `<trial>/slope.pvd` (particles, with the sliding mass), "
+        "`slope_contacts.pvd` (force chains), `slope_walls.pvd`; the g-level plot: "
+        "`g_levels.png`; more pictures from the saved frames: `centridem render <trial>`.\n";
 
   json summary;
   summary["scenario"] = sc.source_path;

@@ -1,7 +1,7 @@
 #include "app/jobs.hpp"
 
-#include "core/errors.hpp"
-#include "core/interrupt.hpp"
+#include "base/errors.hpp"
+#include "base/interrupt.hpp"
 
 #include <algorithm>
 #include <cerrno>

@@ -3,10 +3,11 @@
 // other failure.
 #include "app/cli.hpp"
 #include "app/cmd_generate.hpp"
+#include "app/cmd_render.hpp"
 #include "app/cmd_shear.hpp"
 #include "app/cmd_slope.hpp"
-#include "core/errors.hpp"
-#include "core/interrupt.hpp"
+#include "base/errors.hpp"
+#include "base/interrupt.hpp"
 #include "io/output.hpp"
 #include "io/scenario.hpp"
 #include "procedures/bench.hpp"
@@ -99,6 +100,7 @@ int main(int argc, char** argv) {
   add_generate_subcommand(app); // runs itself from its callback
   add_shear_subcommand(app);    // likewise
   add_slope_subcommand(app);    // likewise
+  add_render_subcommand(app);   // likewise
 
   auto* cmd_run = app.add_subcommand(
       "run", "run a staged scenario: particles, walls, gravity, stages of cycling "
@@ -114,6 +116,12 @@ int main(int argc, char** argv) {
   cli::add_set_option(*cmd_run, run.set);
   cli::add_check_flag(*cmd_run, run.check);
 
+  // Exceptions map to exit codes in one place (cli::run_subcommand), as for
+  // generate, shear and slope.
+  cmd_bench->callback(
+      [&bench] { cli::run_subcommand([&bench] { return run_bench_command(bench); }); });
+  cmd_run->callback([&run] { cli::run_subcommand([&run] { return run_run_command(run); }); });
+
   cli::set_error_messages(app);
   if (const int rc = cli::check_subcommand(app, argc, argv); rc != 0) return rc;
   try {
@@ -123,22 +131,5 @@ int main(int argc, char** argv) {
     return rc == 0 ? 0 : 2;
   }
 
-  try {
-    if (*cmd_bench) return run_bench_command(bench);
-    if (*cmd_run) return run_run_command(run);
-  } catch (const InputError& e) {
-    fmt::print(stderr, "centridem: error: {}\n", e.what());
-    return 2;
-  } catch (const InstabilityError& e) {
-    fmt::print(stderr, "centridem: unstable: {}\n", e.what());
-    return 3;
-  } catch (const Interrupted& e) {
-    // The message ends with how to continue (`centridem run --resume DIR`).
-    fmt::print(stderr, "centridem: interrupted: {}\n", e.what());
-    return 128 + e.signal();
-  } catch (const std::exception& e) {
-    fmt::print(stderr, "centridem: error: {}\n", e.what());
-    return 1;
-  }
   return 0;
 }

@@ -1,7 +1,7 @@
 #include "io/checkpoint.hpp"
 
-#include "core/errors.hpp"
-#include "core/world.hpp"
+#include "base/errors.hpp"
+#include "engine/world.hpp"
 
 #include <cstdio>
 #include <cstring>

@@ -1,6 +1,6 @@
 #include "io/csv.hpp"
 
-#include "core/errors.hpp"
+#include "base/errors.hpp"
 
 #include <charconv>
 #include <cmath>

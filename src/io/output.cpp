@@ -1,6 +1,6 @@
 #include "io/output.hpp"
 
-#include "core/errors.hpp"
+#include "base/errors.hpp"
 
 #include <cerrno>
 #include <cstring>

@@ -3,7 +3,7 @@
 // numbers); '#' starts a comment. Writing gives `x y z r vx vy vz` in id order.
 #pragma once
 
-#include "core/vec3.hpp"
+#include "base/vec3.hpp"
 
 #include <string>
 #include <vector>

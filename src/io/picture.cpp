@@ -271,8 +271,9 @@ void draw_disc(const PixelTarget& t, double cx, double cy, double r, const Rgb& 
 }
 
 std::string bar_label(const SideViewInput& in, double v) {
-  if (in.log_scale) return format_log_tick(v);
-  return format_tick(v, nice_step(in.vmin, in.vmax, 6));
+  const double f = in.value_display_factor;
+  if (in.log_scale) return format_log_tick(v * f);
+  return format_tick(v * f, f * nice_step(in.vmin, in.vmax, 6));
 }
 
 } // namespace

@@ -66,7 +66,10 @@ struct SideViewInput {
   double vmin = 1.2e-4, vmax = 5e-3;
   bool log_scale = true;
   ColourMap colour_map = ColourMap::viridis;
-  std::string value_label = "displacement (m)"; // colour bar caption
+  std::string value_label = "displacement (mm)"; // colour bar caption, in the shown unit
+  // The colour bar's labels show value x this (1e3: values in m shown in mm,
+  // as the axes; vmin, vmax and the values stay SI).
+  double value_display_factor = 1e3;
 
   // Optional slice through the breadth.
   bool slice = false;

@@ -1,7 +1,7 @@
 #include "io/scenario.hpp"
 #include "io/toml_read.hpp"
 
-#include "core/errors.hpp"
+#include "base/errors.hpp"
 #include "io/specimen_config.hpp"
 
 #include <algorithm>

@@ -7,9 +7,9 @@
 // are documented in docs/scenario.md; they are public API.
 #pragma once
 
-#include "core/vec3.hpp"
-#include "core/walls.hpp"
-#include "core/world.hpp"
+#include "base/vec3.hpp"
+#include "engine/walls.hpp"
+#include "engine/world.hpp"
 #include "io/particle_file.hpp"
 #include "physics/body_field.hpp"
 #include "physics/contact_properties.hpp"

@@ -1,7 +1,7 @@
 #include "io/shear_config.hpp"
 #include "io/toml_read.hpp"
 
-#include "core/errors.hpp"
+#include "base/errors.hpp"
 #include "procedures/paper_material.hpp"
 
 #include <algorithm>

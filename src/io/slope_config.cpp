@@ -1,6 +1,6 @@
 #include "io/slope_config.hpp"
 
-#include "core/errors.hpp"
+#include "base/errors.hpp"
 #include "io/scenario.hpp"
 #include "io/toml_read.hpp"
 #include "procedures/paper_material.hpp"

@@ -1,7 +1,7 @@
 #include "io/specimen_config.hpp"
 #include "io/toml_read.hpp"
 
-#include "core/errors.hpp"
+#include "base/errors.hpp"
 #include "io/csv.hpp"
 #include "io/scenario.hpp" // did_you_mean (read-only use)
 

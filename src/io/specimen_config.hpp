@@ -12,8 +12,8 @@
 // The procedures that make it are in procedures/specimen.hpp.
 #pragma once
 
-#include "core/vec3.hpp"
-#include "core/world.hpp"
+#include "base/vec3.hpp"
+#include "engine/world.hpp"
 #include "physics/contact_properties.hpp"
 
 #include <array>

@@ -1,6 +1,6 @@
 #include "io/toml_read.hpp"
 
-#include "core/errors.hpp"
+#include "base/errors.hpp"
 #include "io/scenario.hpp" // did_you_mean
 
 #include <algorithm>

@@ -4,7 +4,7 @@
 // what is allowed, and FILE:LINE:COLUMN.
 #pragma once
 
-#include "core/vec3.hpp"
+#include "base/vec3.hpp"
 #include "physics/contact_properties.hpp"
 
 #include <functional>

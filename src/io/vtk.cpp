@@ -1,122 +1,143 @@
 #include "io/vtk.hpp"
 
-#include "core/world.hpp"
+#include "engine/world.hpp"
 #include "io/output.hpp"
 
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
 #include <fmt/format.h>
 #include <iterator>
+#include <stdexcept>
+#include <zlib.h>
 
 namespace centridem {
 
 namespace {
 
-using Buffer = fmt::memory_buffer;
-
-constexpr const char* kHeader = "<?xml version=\"1.0\"?>\n";
-
-void open_array(Buffer& b, const char* type, const char* name, int components) {
-  fmt::format_to(std::back_inserter(b), "        <DataArray type=\"{}\" Name=\"{}\"", type, name);
-  if (components > 1)
-    fmt::format_to(std::back_inserter(b), " NumberOfComponents=\"{}\"", components);
-  fmt::format_to(std::back_inserter(b), " format=\"ascii\">\n");
-}
-
-void close_array(Buffer& b) {
-  fmt::format_to(std::back_inserter(b), "\n        </DataArray>\n");
-}
-
-// Values of one array, several to a line so that the files stay readable.
-template <class T, class F> void values(Buffer& b, std::size_t n, F&& value, const char* spec) {
-  auto out = std::back_inserter(b);
-  for (std::size_t i = 0; i < n; ++i) {
-    const std::string_view sep = i == 0 ? "          " : (i % 6 == 0 ? "\n          " : " ");
-    b.append(sep.data(), sep.data() + sep.size());
-    fmt::format_to(out, fmt::runtime(spec), static_cast<T>(value(i)));
+// A VTK XML file in the appended, zlib-compressed binary form (the form
+// ParaView itself writes): the XML names each DataArray with an `offset` into
+// one <AppendedData encoding="raw"> section after it; each array there is a
+// UInt64 header (number of blocks, uncompressed block size, size of the last
+// partial block or 0, compressed size of each block) and the compressed
+// blocks (VTK file formats, "XML File Formats", vtkZLibDataCompressor).
+class XmlVtk {
+public:
+  explicit XmlVtk(const char* type) : type_(type) {
+    fmt::format_to(std::back_inserter(xml_),
+                   "<?xml version=\"1.0\"?>\n<VTKFile type=\"{}\" version=\"1.0\" "
+                   "byte_order=\"LittleEndian\" header_type=\"UInt64\" "
+                   "compressor=\"vtkZLibDataCompressor\">\n  <{}>\n",
+                   type, type);
   }
-}
-
-template <class F> void vectors(Buffer& b, std::size_t n, F&& value, const char* spec) {
-  auto out = std::back_inserter(b);
-  const std::string triple = std::string(spec) + " " + spec + " " + spec;
-  for (std::size_t i = 0; i < n; ++i) {
-    const std::string_view sep = i == 0 ? "          " : (i % 2 == 0 ? "\n          " : "  ");
-    b.append(sep.data(), sep.data() + sep.size());
-    const Vec3 v = value(i);
-    fmt::format_to(out, fmt::runtime(triple), v.x, v.y, v.z);
+  void line(std::string_view text) {
+    xml_.append(text.data(), text.data() + text.size());
+    xml_.push_back('\n');
   }
+  // One DataArray of n tuples of `components` values of type T (VTK type name `vtk_type`).
+  template <class T>
+  void array(const char* vtk_type, std::string_view name, int components, const std::vector<T>& v) {
+    fmt::format_to(std::back_inserter(xml_), "        <DataArray type=\"{}\" Name=\"{}\"", vtk_type,
+                   name);
+    if (components > 1)
+      fmt::format_to(std::back_inserter(xml_), " NumberOfComponents=\"{}\"", components);
+    fmt::format_to(std::back_inserter(xml_), " format=\"appended\" offset=\"{}\"/>\n",
+                   appended_.size());
+    append_compressed(reinterpret_cast<const unsigned char*>(v.data()), v.size() * sizeof(T));
+  }
+  void write(const std::string& path) {
+    fmt::format_to(std::back_inserter(xml_), "  </{}>\n  <AppendedData encoding=\"raw\">\n   _",
+                   type_);
+    std::string all(xml_.data(), xml_.size());
+    all.append(appended_.begin(), appended_.end());
+    all += "\n  </AppendedData>\n</VTKFile>\n";
+    write_text_file(path, all);
+  }
+
+private:
+  void append_compressed(const unsigned char* data, std::size_t bytes) {
+    constexpr std::uint64_t kBlock = 1u << 20; // uncompressed block size [bytes]
+    const std::uint64_t blocks = (bytes + kBlock - 1) / kBlock;
+    std::vector<std::uint64_t> header{blocks, kBlock, bytes % kBlock};
+    std::vector<std::vector<unsigned char>> packed;
+    for (std::uint64_t b = 0; b < blocks; ++b) {
+      const std::uint64_t len = std::min<std::uint64_t>(kBlock, bytes - b * kBlock);
+      uLongf out_len = compressBound(static_cast<uLong>(len));
+      std::vector<unsigned char> out(out_len);
+      if (compress2(out.data(), &out_len, data + b * kBlock, static_cast<uLong>(len),
+                    Z_BEST_SPEED) != Z_OK)
+        throw std::runtime_error("zlib could not compress a VTK array");
+      out.resize(out_len);
+      header.push_back(out_len);
+      packed.push_back(std::move(out));
+    }
+    const auto* h = reinterpret_cast<const char*>(header.data());
+    appended_.insert(appended_.end(), h, h + header.size() * sizeof(std::uint64_t));
+    for (const auto& blk : packed) appended_.insert(appended_.end(), blk.begin(), blk.end());
+  }
+  const char* type_;
+  fmt::memory_buffer xml_;
+  std::vector<char> appended_;
+};
+
+std::vector<double> xyz(const std::vector<Vec3>& v) {
+  std::vector<double> out;
+  out.reserve(3 * v.size());
+  for (const Vec3& a : v) out.insert(out.end(), {a.x, a.y, a.z});
+  return out;
 }
 
-constexpr const char* kPos = "{:.9g}"; // positions: 9 significant digits
-constexpr const char* kVal = "{:.7g}"; // everything else
+// Single precision for the fields (about 7 significant digits, as the ASCII
+// files had); positions and radii keep double precision.
+template <class F> std::vector<float> xyz32(std::size_t n, F&& value) {
+  std::vector<float> out;
+  out.reserve(3 * n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const Vec3 a = value(i);
+    out.insert(out.end(),
+               {static_cast<float>(a.x), static_cast<float>(a.y), static_cast<float>(a.z)});
+  }
+  return out;
+}
+
+template <class T, class F> std::vector<T> each(std::size_t n, F&& value) {
+  std::vector<T> out(n);
+  for (std::size_t i = 0; i < n; ++i) out[i] = static_cast<T>(value(i));
+  return out;
+}
 
 } // namespace
 
-void write_particles_vtu(const World& world, const std::string& path) {
+void write_particles_vtu(const World& world, const std::string& path,
+                         const std::vector<PointField>& extra) {
   const ParticleStore& p = world.particles();
   const std::size_t n = p.size();
-  Buffer b;
-  auto out = std::back_inserter(b);
-  fmt::format_to(out, "{}", kHeader);
-  fmt::format_to(out, "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" "
-                      "byte_order=\"LittleEndian\" header_type=\"UInt64\">\n");
-  fmt::format_to(out, "  <UnstructuredGrid>\n");
-  fmt::format_to(out, "    <Piece NumberOfPoints=\"{}\" NumberOfCells=\"{}\">\n", n, n);
-  fmt::format_to(out, "      <PointData Scalars=\"radius\" Vectors=\"velocity\">\n");
-  open_array(b, "Float64", "radius", 1);
-  values<double>(
-      b, n, [&](std::size_t i) { return p.radius[i]; }, kPos);
-  close_array(b);
-  open_array(b, "Int64", "id", 1);
-  values<long long>(
-      b, n, [&](std::size_t i) { return p.id[i]; }, "{}");
-  close_array(b);
-  open_array(b, "Int32", "group", 1);
-  values<int>(
-      b, n, [&](std::size_t i) { return p.group[i]; }, "{}");
-  close_array(b);
-  open_array(b, "Float64", "velocity", 3);
-  vectors(
-      b, n, [&](std::size_t i) { return p.velocity[i]; }, kVal);
-  close_array(b);
-  open_array(b, "Float64", "displacement", 3);
-  vectors(
-      b, n, [&](std::size_t i) { return p.displacement[i]; }, kVal);
-  close_array(b);
-  open_array(b, "Float64", "displacement_magnitude", 1);
-  values<double>(
-      b, n, [&](std::size_t i) { return norm(p.displacement[i]); }, kVal);
-  close_array(b);
-  open_array(b, "Float64", "spin", 3);
-  vectors(
-      b, n, [&](std::size_t i) { return p.spin[i]; }, kVal);
-  close_array(b);
-  open_array(b, "Float64", "force", 3);
-  vectors(
-      b, n, [&](std::size_t i) { return p.force[i]; }, kVal);
-  close_array(b);
-  fmt::format_to(out, "      </PointData>\n");
-  fmt::format_to(out, "      <Points>\n");
-  open_array(b, "Float64", "Points", 3);
-  vectors(
-      b, n, [&](std::size_t i) { return p.position[i]; }, kPos);
-  close_array(b);
-  fmt::format_to(out, "      </Points>\n");
-  fmt::format_to(out, "      <Cells>\n");
-  open_array(b, "Int64", "connectivity", 1);
-  values<std::size_t>(
-      b, n, [](std::size_t i) { return i; }, "{}");
-  close_array(b);
-  open_array(b, "Int64", "offsets", 1);
-  values<std::size_t>(
-      b, n, [](std::size_t i) { return i + 1; }, "{}");
-  close_array(b);
-  open_array(b, "UInt8", "types", 1);
-  values<int>(
-      b, n, [](std::size_t) { return 1; }, "{}"); // VTK_VERTEX
-  close_array(b);
-  fmt::format_to(out, "      </Cells>\n");
-  fmt::format_to(out, "    </Piece>\n  </UnstructuredGrid>\n</VTKFile>\n");
-  write_text_file(path, std::string_view(b.data(), b.size()));
+  for (const PointField& f : extra)
+    if (f.values.size() != n)
+      throw std::logic_error(fmt::format("VTK point field {} has {} values for {} particles",
+                                         f.name, f.values.size(), n));
+  XmlVtk v("UnstructuredGrid");
+  v.line(fmt::format("    <Piece NumberOfPoints=\"{}\" NumberOfCells=\"{}\">", n, n));
+  v.line("      <PointData Scalars=\"radius\" Vectors=\"velocity\">");
+  v.array("Float64", "radius", 1, p.radius);
+  v.array("Int64", "id", 1, each<std::int64_t>(n, [&](std::size_t i) { return p.id[i]; }));
+  v.array("Int32", "group", 1, each<std::int32_t>(n, [&](std::size_t i) { return p.group[i]; }));
+  v.array("Float32", "velocity", 3, xyz32(n, [&](std::size_t i) { return p.velocity[i]; }));
+  v.array("Float32", "displacement", 3, xyz32(n, [&](std::size_t i) { return p.displacement[i]; }));
+  v.array("Float32", "spin", 3, xyz32(n, [&](std::size_t i) { return p.spin[i]; }));
+  v.array("Float32", "force", 3, xyz32(n, [&](std::size_t i) { return p.force[i]; }));
+  for (const PointField& f : extra) v.array("Float32", f.name, 1, f.values);
+  v.line("      </PointData>");
+  v.line("      <Points>");
+  v.array("Float64", "Points", 3, xyz(p.position));
+  v.line("      </Points>");
+  v.line("      <Cells>");
+  v.array("Int64", "connectivity", 1, each<std::int64_t>(n, [](std::size_t i) { return i; }));
+  v.array("Int64", "offsets", 1, each<std::int64_t>(n, [](std::size_t i) { return i + 1; }));
+  v.array("UInt8", "types", 1, std::vector<std::uint8_t>(n, 1)); // VTK_VERTEX
+  v.line("      </Cells>");
+  v.line("    </Piece>");
+  v.write(path);
 }
 
 void write_contacts_vtp(const World& world, const std::string& path) {
@@ -134,53 +155,92 @@ void write_contacts_vtp(const World& world, const std::string& path) {
       points.push_back(static_cast<std::uint32_t>(k));
     }
   const std::size_t nc = contacts.size();
-  Buffer b;
-  auto out = std::back_inserter(b);
-  fmt::format_to(out, "{}", kHeader);
-  fmt::format_to(out, "<VTKFile type=\"PolyData\" version=\"1.0\" byte_order=\"LittleEndian\" "
-                      "header_type=\"UInt64\">\n");
-  fmt::format_to(out, "  <PolyData>\n");
-  fmt::format_to(out,
-                 "    <Piece NumberOfPoints=\"{}\" NumberOfVerts=\"0\" NumberOfLines=\"{}\" "
-                 "NumberOfStrips=\"0\" NumberOfPolys=\"0\">\n",
-                 points.size(), nc);
-  fmt::format_to(out, "      <Points>\n");
-  open_array(b, "Float64", "Points", 3);
-  vectors(
-      b, points.size(), [&](std::size_t k) { return p.position[points[k]]; }, kPos);
-  close_array(b);
-  fmt::format_to(out, "      </Points>\n");
-  fmt::format_to(out, "      <CellData Scalars=\"normal_force_N\" Vectors=\"force_N\">\n");
-  open_array(b, "Float64", "force_N", 3);
-  vectors(
-      b, nc, [&](std::size_t k) { return contacts[k].force_on_j; }, kVal);
-  close_array(b);
-  open_array(b, "Float64", "normal_force_N", 1);
-  values<double>(
-      b, nc, [&](std::size_t k) { return dot(contacts[k].force_on_j, contacts[k].normal); }, kVal);
-  close_array(b);
-  open_array(b, "Float64", "overlap_m", 1);
-  values<double>(
-      b, nc, [&](std::size_t k) { return contacts[k].overlap_m; }, kVal);
-  close_array(b);
-  fmt::format_to(out, "      </CellData>\n");
-  fmt::format_to(out, "      <Lines>\n");
-  open_array(b, "Int64", "connectivity", 1);
-  values<long long>(
-      b, 2 * nc,
-      [&](std::size_t k) {
-        const ContactView& c = contacts[k / 2];
-        return point_of[k % 2 == 0 ? c.i : c.j];
-      },
-      "{}");
-  close_array(b);
-  open_array(b, "Int64", "offsets", 1);
-  values<std::size_t>(
-      b, nc, [](std::size_t k) { return 2 * (k + 1); }, "{}");
-  close_array(b);
-  fmt::format_to(out, "      </Lines>\n");
-  fmt::format_to(out, "    </Piece>\n  </PolyData>\n</VTKFile>\n");
-  write_text_file(path, std::string_view(b.data(), b.size()));
+  XmlVtk v("PolyData");
+  v.line(fmt::format("    <Piece NumberOfPoints=\"{}\" NumberOfVerts=\"0\" NumberOfLines=\"{}\" "
+                     "NumberOfStrips=\"0\" NumberOfPolys=\"0\">",
+                     points.size(), nc));
+  v.line("      <Points>");
+  std::vector<double> xs;
+  xs.reserve(3 * points.size());
+  for (std::uint32_t k : points)
+    xs.insert(xs.end(), {p.position[k].x, p.position[k].y, p.position[k].z});
+  v.array("Float64", "Points", 3, xs);
+  v.line("      </Points>");
+  v.line("      <CellData Scalars=\"normal_force_N\" Vectors=\"force_N\">");
+  v.array("Float32", "force_N", 3,
+          xyz32(nc, [&](std::size_t k) { return contacts[k].force_on_j; }));
+  v.array("Float32", "normal_force_N", 1, each<float>(nc, [&](std::size_t k) {
+            return dot(contacts[k].force_on_j, contacts[k].normal);
+          }));
+  v.array("Float32", "overlap_m", 1,
+          each<float>(nc, [&](std::size_t k) { return contacts[k].overlap_m; }));
+  v.line("      </CellData>");
+  v.line("      <Lines>");
+  v.array("Int64", "connectivity", 1, each<std::int64_t>(2 * nc, [&](std::size_t k) {
+            const ContactView& c = contacts[k / 2];
+            return point_of[k % 2 == 0 ? c.i : c.j];
+          }));
+  v.array("Int64", "offsets", 1, each<std::int64_t>(nc, [](std::size_t k) { return 2 * (k + 1); }));
+  v.line("      </Lines>");
+  v.line("    </Piece>");
+  v.write(path);
+}
+
+void write_walls_vtp(const World& world, const std::string& path) {
+  const ParticleStore& p = world.particles();
+  const std::vector<Wall>& walls = world.walls();
+  // Infinite planes are drawn as squares centred on the particles' bounding
+  // box (projected onto the plane), as wide as its diagonal.
+  Vec3 lo{0, 0, 0}, hi{0, 0, 0};
+  if (p.size() > 0) {
+    lo = hi = p.position[0];
+    for (std::size_t i = 0; i < p.size(); ++i)
+      for (int a = 0; a < 3; ++a) {
+        lo[a] = std::min(lo[a], p.position[i][a] - p.radius[i]);
+        hi[a] = std::max(hi[a], p.position[i][a] + p.radius[i]);
+      }
+  }
+  const Vec3 centre = 0.5 * (lo + hi);
+  const double half = std::max(0.5 * norm(hi - lo), 1e-9);
+  std::vector<double> xs;
+  for (const Wall& w : walls) {
+    Vec3 c = w.point, u = w.axis_u, vv = w.axis_v;
+    double hu = w.half_u, hv = w.half_v;
+    if (w.shape == WallShape::plane) {
+      c = centre - dot(centre - w.point, w.normal) * w.normal;
+      // Any unit vector across the normal, then the third one.
+      const Vec3 t = std::abs(w.normal.x) < 0.9 ? Vec3{1, 0, 0} : Vec3{0, 1, 0};
+      u = cross(w.normal, t);
+      u = u * (1.0 / norm(u));
+      vv = cross(w.normal, u);
+      hu = hv = half;
+    }
+    for (const Vec3& q :
+         {c - hu * u - hv * vv, c + hu * u - hv * vv, c + hu * u + hv * vv, c - hu * u + hv * vv})
+      xs.insert(xs.end(), {q.x, q.y, q.z});
+  }
+  const std::size_t nw = walls.size();
+  XmlVtk v("PolyData");
+  v.line(fmt::format("    <Piece NumberOfPoints=\"{}\" NumberOfVerts=\"0\" NumberOfLines=\"0\" "
+                     "NumberOfStrips=\"0\" NumberOfPolys=\"{}\">",
+                     4 * nw, nw));
+  v.line("      <Points>");
+  v.array("Float64", "Points", 3, xs);
+  v.line("      </Points>");
+  v.line("      <CellData Scalars=\"wall_index\" Vectors=\"force_N\">");
+  v.array("Int32", "wall_index", 1, each<std::int32_t>(nw, [](std::size_t k) { return k; }));
+  v.array("Float32", "force_N", 3, xyz32(nw, [&](std::size_t k) { return walls[k].force; }));
+  v.array("Float32", "velocity_m_per_s", 3,
+          xyz32(nw, [&](std::size_t k) { return walls[k].velocity; }));
+  v.array("Int32", "contacts", 1,
+          each<std::int32_t>(nw, [&](std::size_t k) { return walls[k].contact_count; }));
+  v.line("      </CellData>");
+  v.line("      <Polys>");
+  v.array("Int64", "connectivity", 1, each<std::int64_t>(4 * nw, [](std::size_t k) { return k; }));
+  v.array("Int64", "offsets", 1, each<std::int64_t>(nw, [](std::size_t k) { return 4 * (k + 1); }));
+  v.line("      </Polys>");
+  v.line("    </Piece>");
+  v.write(path);
 }
 
 void PvdSeries::add(double time_s, const std::string& file) {
@@ -194,7 +254,7 @@ void PvdSeries::assign(std::vector<std::pair<double, std::string>> entries) {
 }
 
 void PvdSeries::write() const {
-  std::string s = kHeader;
+  std::string s = "<?xml version=\"1.0\"?>\n";
   s += "<VTKFile type=\"Collection\" version=\"1.0\" byte_order=\"LittleEndian\">\n";
   s += "  <Collection>\n";
   for (const auto& [t, f] : entries_)

@@ -4,7 +4,7 @@
 // branch is loop-invariant); the struct is trivially copyable (checkpoints).
 #pragma once
 
-#include "core/vec3.hpp"
+#include "base/vec3.hpp"
 
 #include <cmath>
 #include <cstdint>

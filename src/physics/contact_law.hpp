@@ -23,7 +23,7 @@
 // attraction law; ../shared/DESIGN.md section "Physics".
 #pragma once
 
-#include "core/vec3.hpp"
+#include "base/vec3.hpp"
 #include "physics/contact_properties.hpp"
 
 #include <algorithm>

@@ -1,6 +1,6 @@
 #include "physics/contact_properties.hpp"
 
-#include "core/errors.hpp"
+#include "base/errors.hpp"
 
 #include <cmath>
 #include <fmt/format.h>

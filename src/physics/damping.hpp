@@ -4,7 +4,7 @@
 // component. F is the full unbalanced force, gravity included. [N or N m]
 #pragma once
 
-#include "core/vec3.hpp"
+#include "base/vec3.hpp"
 
 namespace centridem {
 

@@ -1,7 +1,7 @@
 #include "procedures/bench.hpp"
 
-#include "core/errors.hpp"
-#include "core/world.hpp"
+#include "base/errors.hpp"
+#include "engine/world.hpp"
 #include "io/particle_file.hpp"
 #include "procedures/paper_material.hpp"
 

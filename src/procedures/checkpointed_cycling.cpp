@@ -1,8 +1,8 @@
 #include "procedures/checkpointed_cycling.hpp"
 
-#include "core/errors.hpp"
-#include "core/interrupt.hpp"
-#include "core/world.hpp"
+#include "base/errors.hpp"
+#include "base/interrupt.hpp"
+#include "engine/world.hpp"
 #include "io/checkpoint.hpp"
 
 #include <fmt/format.h>

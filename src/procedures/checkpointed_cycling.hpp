@@ -5,7 +5,7 @@
 //
 // At a check, a checkpoint is written when one is due (wall-clock minutes or
 // steps since the last one) or asked for (SIGINT / SIGTERM,
-// core/interrupt.hpp); after a stop request's checkpoint `Interrupted` is
+// base/interrupt.hpp); after a stop request's checkpoint `Interrupted` is
 // thrown (exit code 128 + signal), naming the checkpoint. Writing one does not
 // perturb the run (io/checkpoint.hpp), so a run stopped and resumed any number
 // of times ends bit for bit like one never stopped (same thread count).

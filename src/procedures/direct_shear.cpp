@@ -1,7 +1,7 @@
 #include "procedures/direct_shear.hpp"
 #include "procedures/specimen.hpp"
 
-#include "core/errors.hpp"
+#include "base/errors.hpp"
 #include "io/checkpoint.hpp"
 
 #include <algorithm>

@@ -8,7 +8,7 @@
 // shear plane at z = H/2.
 #pragma once
 
-#include "core/world.hpp"
+#include "engine/world.hpp"
 #include "physics/contact_properties.hpp"
 #include "procedures/checkpointed_cycling.hpp"
 

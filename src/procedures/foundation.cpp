@@ -1,7 +1,7 @@
 #include "procedures/foundation.hpp"
 
-#include "core/errors.hpp"
-#include "core/world.hpp"
+#include "base/errors.hpp"
+#include "engine/world.hpp"
 #include "io/checkpoint.hpp"
 #include "io/output.hpp"
 #include "io/toml_read.hpp"

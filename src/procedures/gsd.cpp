@@ -1,6 +1,7 @@
 #include "procedures/gsd.hpp"
 
-#include "core/errors.hpp"
+#include "base/errors.hpp"
+#include "io/plot.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -222,6 +223,65 @@ std::vector<double> draw_radii(const std::vector<GradationBin>& bins, double sol
     carry = target - got;
   }
   return radii;
+}
+
+std::vector<std::pair<double, double>> passing_curve(std::vector<double> radii) {
+  std::sort(radii.begin(), radii.end());
+  double total = 0;
+  for (double r : radii) total += r * r * r; // volumes up to 4/3 pi
+  std::vector<std::pair<double, double>> out;
+  double sum = 0;
+  for (double r : radii) {
+    sum += r * r * r;
+    out.emplace_back(2 * r, total > 0 ? 100.0 * sum / total : 0.0);
+  }
+  return out;
+}
+
+std::vector<std::pair<double, double>> target_passing_curve(const std::vector<GradationBin>& bins) {
+  std::vector<std::pair<double, double>> out;
+  if (bins.empty()) return out;
+  out.emplace_back(bins.front().d_min_m, 0.0);
+  double sum = 0;
+  for (const GradationBin& b : bins) {
+    sum += b.volume_fraction;
+    out.emplace_back(b.d_max_m, 100.0 * sum);
+  }
+  return out;
+}
+
+void plot_grain_size_curves(const std::vector<double>& radii, const SpecimenSpec& spec,
+                            const std::string& png_path) {
+  LinePlot p;
+  p.title = "grain-size curves";
+  p.x_label = "particle diameter (mm)";
+  p.y_label = "percent passing by mass (%)";
+  p.log_x = true;
+  p.y_range = AxisRange{0, 100};
+  p.legend = LegendPlace::upper_left;
+  auto add = [&](const std::string& name, const std::vector<std::pair<double, double>>& c) {
+    std::vector<double> x, y;
+    for (const auto& [d, pct] : c) x.push_back(1e3 * d), y.push_back(pct);
+    return &p.add(name, std::move(x), std::move(y));
+  };
+  if (spec.sieve) {
+    std::vector<std::pair<double, double>> c;
+    for (const SieveRow& r : spec.sieve->rows)
+      if (r.size_m > 0) c.emplace_back(r.size_m, r.percent_passing);
+    add("sieve analysis (" + spec.sieve_csv + ")", c)->markers(Marker::circle).dashed_line();
+  }
+  const std::vector<GradationBin> bins = resolve_gradation(spec);
+  if (!bins.empty())
+    add("target (the gradation generated from)", target_passing_curve(bins))
+        ->markers(Marker::square);
+  // The particles' curve, thinned to about 400 points.
+  const auto all = passing_curve(radii);
+  std::vector<std::pair<double, double>> thin;
+  const std::size_t step = std::max<std::size_t>(1, all.size() / 400);
+  for (std::size_t k = 0; k < all.size(); k += step) thin.push_back(all[k]);
+  if (!all.empty() && (all.size() - 1) % step != 0) thin.push_back(all.back());
+  add(fmt::format("generated ({} particles)", radii.size()), thin);
+  p.render(png_path, 900, 600);
 }
 
 } // namespace centridem

@@ -20,6 +20,7 @@
 #include <cstdint>
 #include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace centridem {
@@ -65,6 +66,19 @@ double mass_median_diameter(std::vector<double> radii);
 // every bin. Size bins.size() + 1.
 std::vector<double> volume_fractions(const std::vector<double>& radii,
                                      const std::vector<GradationBin>& bins);
+
+// Grain-size curves, percent passing by mass against diameter, as a sieve
+// analysis reports them. Of a set of particles: one point per particle in
+// increasing size, (d, 100 x volume of the particles up to and including it /
+// total volume) [m, %]. Of a target gradation: the bin edges, (d_min of the
+// first bin, 0), then (d_max of each bin, cumulative fraction) [m, %].
+std::vector<std::pair<double, double>> passing_curve(std::vector<double> radii);
+std::vector<std::pair<double, double>> target_passing_curve(const std::vector<GradationBin>& bins);
+
+// gsd.png: the target's curve, the sieve analysis it came from (when the spec
+// has one) and the generated particles' curve, on a log diameter axis in mm.
+void plot_grain_size_curves(const std::vector<double>& radii, const SpecimenSpec& spec,
+                            const std::string& png_path);
 
 // The random source of specimen generation: std::mt19937_64 with the
 // specimen's seed, turned into doubles by the top 53 bits (the same on every

@@ -26,7 +26,7 @@
 // inadmissible (nullopt), not clipped.
 #include "procedures/limit_equilibrium.hpp"
 
-#include "core/errors.hpp"
+#include "base/errors.hpp"
 #include "physics/body_field.hpp"
 
 #include <algorithm>

@@ -1,7 +1,7 @@
 #include "procedures/slope_geometry.hpp"
 
-#include "core/errors.hpp"
-#include "core/world.hpp"
+#include "base/errors.hpp"
+#include "engine/world.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -16,7 +16,7 @@
 // beyond the toe.
 #pragma once
 
-#include "core/vec3.hpp"
+#include "base/vec3.hpp"
 
 #include <cstddef>
 #include <functional>

@@ -1,6 +1,6 @@
 #include "procedures/slope_stability.hpp"
 
-#include "core/errors.hpp"
+#include "base/errors.hpp"
 #include "physics/body_field.hpp"
 #include "procedures/foundation.hpp"
 

@@ -1,7 +1,7 @@
 #include "procedures/slope_trial.hpp"
 
-#include "core/errors.hpp"
-#include "core/world.hpp"
+#include "base/errors.hpp"
+#include "engine/world.hpp"
 #include "io/checkpoint.hpp"
 #include "io/output.hpp"
 #include "io/picture.hpp"
@@ -16,6 +16,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fmt/format.h>
+#include <fstream>
 #include <nlohmann/json.hpp>
 #include <numbers>
 #include <optional>
@@ -39,6 +40,7 @@ struct Progress {
   std::size_t level = 0; // index into plan.g_levels
   long level_first_step = 0;
   double level_t0 = 0;            // world time at the level's start [s]
+  double cut_t0 = 0;              // world time at the cut: the trial's time axis starts here [s]
   long foundation_first_step = 0; // world step at the start of the foundation's cycling
   FoundationResult foundation;
   std::size_t excavated = 0, slope_particles = 0;
@@ -79,6 +81,7 @@ std::string save_progress(const Progress& p, const FailureMonitor* monitor) {
             {"level", p.level},
             {"level_first_step", p.level_first_step},
             {"level_t0", p.level_t0},
+            {"cut_t0", p.cut_t0},
             {"foundation_first_step", p.foundation_first_step},
             {"foundation", to_json(p.foundation)},
             {"excavated", p.excavated},
@@ -103,6 +106,8 @@ Progress load_progress(const std::string& blob, json& monitor_state, const std::
     p.level = j.at("level");
     p.level_first_step = j.at("level_first_step");
     p.level_t0 = j.at("level_t0");
+    // Checkpoints before cut_t0 existed: the first level starts at the cut.
+    p.cut_t0 = j.contains("cut_t0") ? j.at("cut_t0").get<double>() : p.level_t0;
     p.foundation_first_step = j.at("foundation_first_step");
     p.foundation = foundation_from_json(j.at("foundation"));
     p.excavated = j.at("excavated");
@@ -322,14 +327,33 @@ SlopeTrialResult run_slope_trial(const SlopeScenario& sc, const SlopeTrialPlan& 
     pr.level = 0;
     pr.level_first_step = world.step_count();
     pr.level_t0 = world.time();
+    pr.cut_t0 = world.time();
     pr.next_frame_step = world.step_count();
     monitor.emplace(geometry, sc.failure);
     cyc.write_now();
   }
 
   // ---------------------------------------------------------- frames
+  // One time axis for the log, the pictures, the ParaView series and
+  // frames.csv: seconds since the cut (a stepped campaign's later levels go on
+  // counting; their own start is in the log and the picture's title).
+  auto trial_time = [&] { return world.time() - pr.cut_t0; };
   PvdSeries pvd((dir / "slope.pvd").string());
-  for (const auto& [t, f] : pr.vtk_frames) pvd.add(t, f);
+  PvdSeries pvd_contacts((dir / "slope_contacts.pvd").string());
+  PvdSeries pvd_walls((dir / "slope_walls.pvd").string());
+  for (const auto& [t, f] : pr.vtk_frames) {
+    pvd.add(t, f);
+    const std::string k = f.substr(f.size() - 8, 4); // "frames/particles_NNNN.vtu"
+    pvd_contacts.add(t, fmt::format("frames/contacts_{}.vtp", k));
+    pvd_walls.add(t, fmt::format("frames/walls_{}.vtp", k));
+  }
+  std::string frames_csv = "frame,time_after_cut_s,step,g_level,picture,title\n";
+  if (fs::exists(dir / "frames.csv")) { // a resumed trial: its frames so far
+    frames_csv.clear();
+    std::ifstream in(dir / "frames.csv");
+    std::string line;
+    for (int k = 0; std::getline(in, line) && k <= pr.frames; ++k) frames_csv += line + "\n";
+  }
   SideViewWindow window{-0.02 * geometry.length(), 1.02 * geometry.length(),
                         -0.03 * geometry.height(), 1.08 * geometry.height()};
   // The limit-equilibrium circle at the level's g (drawn on every picture).
@@ -380,23 +404,47 @@ SlopeTrialResult run_slope_trial(const SlopeScenario& sc, const SlopeTrialPlan& 
       in.extra_lines.push_back(slip);
     }
     if (auto le = limit_equilibrium_line(g_level)) in.extra_lines.push_back(*le);
-    const double t = world.time() - pr.level_t0;
+    const double t = trial_time();
     std::string state;
     if (monitor) state = std::string(to_string(monitor->state()));
-    in.title = fmt::format("{} — {:g} g — t = {:.4f} s — step {} — {}",
+    const std::string level_start =
+        pr.level_t0 > pr.cut_t0
+            ? fmt::format(" (this level from {:.5f} s)", pr.level_t0 - pr.cut_t0)
+            : std::string();
+    in.title = fmt::format("{} — {:g} g — t = {:.5f} s after the cut{} — step {} — {}",
                            sc.name.empty() ? std::string("benched slope") : sc.name, g_level, t,
-                           world.step_count(), state);
+                           level_start, world.step_count(), state);
     in.window = window;
     in.width_px = sc.output.picture_width_px;
     const std::string name = fmt::format("pictures/frame_{:04d}.png", pr.frames);
     render_side_view(in, (dir / name).string());
     pr.pictures.push_back(name);
     if (sc.output.vtk) {
+      // `sliding`: 1 for the particles of the sliding mass (the monitor's
+      // largest connected group of displaced particles, once it counts as one).
+      PointField sliding{"sliding", std::vector<float>(P.size(), 0.0f)};
+      if (monitor && monitor->report().sliding_mass && monitor->report().d50_m > 0)
+        for (std::size_t i :
+             find_sliding_mass(world, sc.failure.mass, monitor->report().d50_m).indices)
+          sliding.values[i] = 1.0f;
       const std::string vtu = fmt::format("frames/particles_{:04d}.vtu", pr.frames);
-      write_particles_vtu(world, (dir / vtu).string());
-      pr.vtk_frames.emplace_back(world.time(), vtu);
-      pvd.add(world.time(), vtu);
+      const std::string vtp = fmt::format("frames/contacts_{:04d}.vtp", pr.frames);
+      const std::string wvtp = fmt::format("frames/walls_{:04d}.vtp", pr.frames);
+      write_particles_vtu(world, (dir / vtu).string(), {sliding});
+      write_contacts_vtp(world, (dir / vtp).string());
+      write_walls_vtp(world, (dir / wvtp).string());
+      pr.vtk_frames.emplace_back(t, vtu);
+      pvd.add(t, vtu);
+      pvd_contacts.add(t, vtp);
+      pvd_walls.add(t, wvtp);
     }
+    std::string title = in.title;
+    std::replace(title.begin(), title.end(), ',', ';');
+    frames_csv += fmt::format("{},{:.17g},{},{:g},{},{}\n", pr.frames, t, world.step_count(),
+                              g_level, name, title);
+    replace_text_file((dir / "frames.csv").string(), frames_csv);
+    say(fmt::format("frame {}: t = {:.5f} s after the cut, step {}, {:g} g ({})", pr.frames, t,
+                    world.step_count(), g_level, name));
     ++pr.frames;
   };
 
@@ -443,9 +491,14 @@ SlopeTrialResult run_slope_trial(const SlopeScenario& sc, const SlopeTrialPlan& 
       }
       if (seconds_since(last_progress) >= o.progress_interval_s) {
         const FailureReport& q = monitor->report();
-        say(fmt::format("level {:g} g: t = {:.5f} s of {:g}, step {}, slope ratio {:.3g}, {}, "
-                        "largest moved group {} particles, {:.3g} particle-steps/s",
-                        g, world.time() - pr.level_t0, ts.max_time_s, world.step_count(),
+        const std::string in_level =
+            pr.level_t0 > pr.cut_t0
+                ? fmt::format(", {:.5f} s into this level", world.time() - pr.level_t0)
+                : std::string();
+        say(fmt::format("level {:g} g: t = {:.5f} s after the cut{} (limit {:g} s), step {}, "
+                        "slope ratio {:.3g}, {}, largest moved group {} particles, {:.3g} "
+                        "particle-steps/s",
+                        g, trial_time(), in_level, ts.max_time_s, world.step_count(),
                         q.unbalanced_force_ratio, to_string(q.state), q.largest_group_particles,
                         rate()));
       }

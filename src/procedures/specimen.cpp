@@ -1,6 +1,6 @@
 #include "procedures/specimen.hpp"
 
-#include "core/errors.hpp"
+#include "base/errors.hpp"
 #include "io/output.hpp"
 #include "io/particle_file.hpp"
 #include "io/vtk.hpp"
@@ -763,6 +763,7 @@ void write_specimen_outputs(const World& world, const BuiltSpecimen& built,
   make_directories(dir);
   const fs::path d(dir);
   write_particles_vtu(world, (d / "specimen.vtu").string());
+  plot_grain_size_curves(world.particles().radius, spec, (d / "gsd.png").string());
   {
     const ParticleStore& p = world.particles();
     std::vector<std::size_t> order(p.size());

@@ -21,7 +21,7 @@
 // same build and thread count.
 #pragma once
 
-#include "core/world.hpp"
+#include "engine/world.hpp"
 #include "io/specimen_config.hpp"
 #include "procedures/gsd.hpp"
 

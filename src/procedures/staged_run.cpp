@@ -1,6 +1,6 @@
 #include "procedures/staged_run.hpp"
 
-#include "core/errors.hpp"
+#include "base/errors.hpp"
 #include "io/checkpoint.hpp"
 #include "io/output.hpp"
 #include "io/particle_file.hpp"
@@ -161,14 +161,15 @@ private:
   long last_step_ = -1;
 };
 
-// ParaView frames and their two series files. One frame per step: a frame
+// ParaView frames and their three series files (particles, contact force
+// chains, walls). One frame per step: a frame
 // written at the same step as the last one (a stage that starts by removing
 // particles) replaces it.
 class FrameWriter {
 public:
   explicit FrameWriter(std::string dir)
       : dir_(std::move(dir)), particles_(path_in(dir_, "particles.pvd")),
-        contacts_(path_in(dir_, "contacts.pvd")) {}
+        contacts_(path_in(dir_, "contacts.pvd")), walls_(path_in(dir_, "walls.pvd")) {}
 
   void write(const World& world) {
     if (!made_) make_directories(path_in(dir_, "frames")), made_ = true;
@@ -176,11 +177,14 @@ public:
     const std::size_t k = same ? next_ - 1 : next_;
     const std::string pf = fmt::format("frames/particles_{:06d}.vtu", k);
     const std::string cf = fmt::format("frames/contacts_{:06d}.vtp", k);
+    const std::string wf = fmt::format("frames/walls_{:06d}.vtp", k);
     write_particles_vtu(world, path_in(dir_, pf));
     write_contacts_vtp(world, path_in(dir_, cf));
+    if (!world.walls().empty()) write_walls_vtp(world, path_in(dir_, wf));
     if (!same) {
       particles_.add(world.time(), pf);
       contacts_.add(world.time(), cf);
+      if (!world.walls().empty()) walls_.add(world.time(), wf);
       ++next_;
       last_step_ = world.step_count();
     }
@@ -193,7 +197,8 @@ public:
             {"last_step", last_step_},
             {"made", made_},
             {"particles", particles_.entries()},
-            {"contacts", contacts_.entries()}};
+            {"contacts", contacts_.entries()},
+            {"walls", walls_.entries()}};
   }
   // The series as the checkpoint left them; frames a stopped process wrote
   // after it are removed (this run writes them again).
@@ -204,6 +209,7 @@ public:
     using Entries = std::vector<std::pair<double, std::string>>;
     auto p = j.at("particles").get<Entries>();
     auto c = j.at("contacts").get<Entries>();
+    auto w = j.contains("walls") ? j.at("walls").get<Entries>() : Entries{}; // older checkpoints
     std::error_code ec;
     if (p.empty())
       fs::remove(particles_.path(), ec);
@@ -213,18 +219,23 @@ public:
       fs::remove(contacts_.path(), ec);
     else
       contacts_.assign(std::move(c));
+    if (w.empty())
+      fs::remove(walls_.path(), ec);
+    else
+      walls_.assign(std::move(w));
     for (const auto& e : fs::directory_iterator(fs::path(dir_) / "frames", ec)) {
       const std::string n = e.path().filename().string();
       std::size_t k = 0;
       if (std::sscanf(n.c_str(), "particles_%zu.vtu", &k) == 1 ||
-          std::sscanf(n.c_str(), "contacts_%zu.vtp", &k) == 1)
+          std::sscanf(n.c_str(), "contacts_%zu.vtp", &k) == 1 ||
+          std::sscanf(n.c_str(), "walls_%zu.vtp", &k) == 1)
         if (k >= next_) fs::remove(e.path(), ec);
     }
   }
 
 private:
   std::string dir_;
-  PvdSeries particles_, contacts_;
+  PvdSeries particles_, contacts_, walls_;
   bool made_ = false;
   std::size_t next_ = 0;
   long last_step_ = -1;
@@ -365,7 +376,7 @@ void remove_previous_outputs(const std::string& dir) {
   auto ends = [](const std::string& s, const std::string& e) {
     return s.size() >= e.size() && s.compare(s.size() - e.size(), e.size(), e) == 0;
   };
-  for (const char* f : {"particles.pvd", "contacts.pvd", "final_state.csv"})
+  for (const char* f : {"particles.pvd", "contacts.pvd", "walls.pvd", "final_state.csv"})
     fs::remove(fs::path(dir) / f, ec);
   for (const auto& e : fs::directory_iterator(dir, ec)) {
     const std::string n = e.path().filename().string();
@@ -373,7 +384,8 @@ void remove_previous_outputs(const std::string& dir) {
   }
   for (const auto& e : fs::directory_iterator(fs::path(dir) / "frames", ec)) {
     const std::string n = e.path().filename().string();
-    if ((starts(n, "particles_") && ends(n, ".vtu")) || (starts(n, "contacts_") && ends(n, ".vtp")))
+    if ((starts(n, "particles_") && ends(n, ".vtu")) ||
+        ((starts(n, "contacts_") || starts(n, "walls_")) && ends(n, ".vtp")))
       fs::remove(e.path(), ec);
   }
 }
@@ -544,7 +556,7 @@ struct RunProgress {
 void remove_temporaries(const std::string& dir) {
   std::error_code ec;
   for (const char* f : {"checkpoint.bin.tmp", "particles.pvd.tmp", "contacts.pvd.tmp",
-                        "summary.json.tmp", "final_state.csv.tmp"})
+                        "walls.pvd.tmp", "summary.json.tmp", "final_state.csv.tmp"})
     fs::remove(fs::path(dir) / f, ec);
 }
 

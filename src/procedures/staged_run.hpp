@@ -11,7 +11,7 @@
 // checkpoint left them (no row or frame lost or repeated).
 #pragma once
 
-#include "core/world.hpp"
+#include "engine/world.hpp"
 #include "io/scenario.hpp"
 
 #include <cstdio>

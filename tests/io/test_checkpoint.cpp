@@ -1,7 +1,7 @@
 // Checkpoints: a run split by a checkpoint and resumed in a new World is
 // identical bit for bit to the same run in one go; corrupt files are refused.
-#include "core/errors.hpp"
-#include "core/world.hpp"
+#include "base/errors.hpp"
+#include "engine/world.hpp"
 #include "io/checkpoint.hpp"
 #include "procedures/paper_material.hpp"
 

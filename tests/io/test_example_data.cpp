@@ -3,7 +3,7 @@
 // integer arithmetic, so it is the same on every machine); the test checks
 // that the checked-in file is what it makes. To remake it:
 //   CENTRIDEM_WRITE_EXAMPLE_DATA=1 build/tests/centridem_tests --gtest_filter='ExampleData.*'
-#include "core/errors.hpp"
+#include "base/errors.hpp"
 #include "io/particle_file.hpp"
 #include "io/scenario.hpp"
 

@@ -24,7 +24,7 @@
 //     file's name: "fuzz_hiroshima_sand_gsd.csv = 1 data rows: ...".
 // Any other exception (a std::exception that is not an InputError, toml::parse_error escaping, a
 // non-standard exception) fails the test with the mutated text; a crash ends the test binary.
-#include "core/errors.hpp"
+#include "base/errors.hpp"
 #include "io/particle_file.hpp"
 #include "io/scenario.hpp"
 #include "io/shear_config.hpp"

@@ -17,6 +17,7 @@
 #include <fstream>
 #include <gtest/gtest.h>
 #include <random>
+#include <regex>
 #include <sstream>
 #include <string>
 #include <sys/wait.h>
@@ -164,4 +165,8 @@ TEST_F(KillResume, SummarySaysTheCommandAndTheCriticalGInWords) {
   EXPECT_EQ(line.find('{'), std::string::npos) << line;
   EXPECT_EQ(line, "Critical g: at or below 20 g: the lowest level tried already fails.")
       << "the tiny slope (no friction after the cut) fails at 20 g, its only level";
+  // The wall time, of the command and of its one trial.
+  const std::regex wall(R"(Wall time: [0-9.]+ (s|min|h) for this command \(1 trial\(s\) at once; )"
+                        R"(each trial's own: 20 g: [0-9.]+ (s|min|h)\)\.)");
+  EXPECT_TRUE(std::regex_search(md, wall)) << md;
 }

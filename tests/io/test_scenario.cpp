@@ -1,7 +1,7 @@
 // Scenario files: parsing of a valid file, and one test per class of bad
 // input, each checking that the message names the full key and what is
 // allowed.
-#include "core/errors.hpp"
+#include "base/errors.hpp"
 #include "io/scenario.hpp"
 #include "procedures/staged_run.hpp"
 

@@ -1,7 +1,7 @@
 // The [shear] scenario parser (`centridem shear`, docs/shear.md): a valid
 // scenario resolves every default, the examples parse, and every class of bad
 // key is rejected with an InputError naming the dotted key.
-#include "core/errors.hpp"
+#include "base/errors.hpp"
 #include "io/shear_config.hpp"
 
 #include <gtest/gtest.h>

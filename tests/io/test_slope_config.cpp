@@ -2,8 +2,8 @@
 // parse and resolve to Table 1 and the paper's geometry, the resolved TOML
 // reads back to the same scenario, bad keys are named, and the paper's
 // foundation and slopes have the paper's particle counts (issue 5, item 1).
-#include "core/errors.hpp"
-#include "core/world.hpp"
+#include "base/errors.hpp"
+#include "engine/world.hpp"
 #include "io/slope_config.hpp"
 #include "procedures/slope_geometry.hpp"
 #include "procedures/specimen.hpp"

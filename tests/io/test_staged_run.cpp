@@ -1,11 +1,13 @@
 // A small 3-stage scenario run end to end through the library API (run
 // folder, ParaView files read back as XML), and the `centridem run` binary on
 // a bad scenario (exit code 2 and the message).
-#include "core/errors.hpp"
+#include "base/errors.hpp"
 #include "io/scenario.hpp"
 #include "io/vtk.hpp"
 #include "procedures/staged_run.hpp"
+#include "vtk_test_util.hpp"
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <fmt/format.h>
@@ -25,104 +27,11 @@ using namespace centridem;
 
 namespace {
 
-// ---- a minimal XML reader: elements, attributes, text; throws on malformed input
-struct Xml {
-  std::string name;
-  std::map<std::string, std::string> attr;
-  std::string text;
-  std::vector<std::unique_ptr<Xml>> children;
-
-  const Xml* child(const std::string& n) const {
-    for (const auto& c : children)
-      if (c->name == n) return c.get();
-    return nullptr;
-  }
-  void find_all(const std::string& n, std::vector<const Xml*>& out) const {
-    if (name == n) out.push_back(this);
-    for (const auto& c : children) c->find_all(n, out);
-  }
-};
-
-class XmlParser {
-public:
-  explicit XmlParser(std::string s) : s_(std::move(s)) {}
-  std::unique_ptr<Xml> document() {
-    skip_space();
-    if (s_.compare(i_, 5, "<?xml") == 0) i_ = s_.find("?>", i_) + 2;
-    skip_space();
-    auto root = element();
-    skip_space();
-    if (i_ != s_.size()) throw std::runtime_error("content after the root element");
-    return root;
-  }
-
-private:
-  void skip_space() {
-    while (i_ < s_.size() && std::isspace(static_cast<unsigned char>(s_[i_]))) ++i_;
-  }
-  std::string ident() {
-    const std::size_t b = i_;
-    while (i_ < s_.size() && (std::isalnum(static_cast<unsigned char>(s_[i_])) || s_[i_] == '_'))
-      ++i_;
-    if (b == i_) throw std::runtime_error(fmt::format("name expected at {}", b));
-    return s_.substr(b, i_ - b);
-  }
-  void expect(char c) {
-    if (i_ >= s_.size() || s_[i_] != c)
-      throw std::runtime_error(fmt::format("'{}' expected at {}", c, i_));
-    ++i_;
-  }
-  std::unique_ptr<Xml> element() {
-    auto e = std::make_unique<Xml>();
-    expect('<');
-    e->name = ident();
-    for (;;) {
-      skip_space();
-      if (s_.compare(i_, 2, "/>") == 0) {
-        i_ += 2;
-        return e;
-      }
-      if (s_[i_] == '>') {
-        ++i_;
-        break;
-      }
-      const std::string a = ident();
-      expect('=');
-      expect('"');
-      const std::size_t end = s_.find('"', i_);
-      if (end == std::string::npos) throw std::runtime_error("unterminated attribute");
-      if (!e->attr.emplace(a, s_.substr(i_, end - i_)).second)
-        throw std::runtime_error("duplicate attribute " + a);
-      i_ = end + 1;
-    }
-    for (;;) {
-      const std::size_t lt = s_.find('<', i_);
-      if (lt == std::string::npos) throw std::runtime_error("unclosed <" + e->name + ">");
-      e->text += s_.substr(i_, lt - i_);
-      i_ = lt;
-      if (s_.compare(i_, 2, "</") == 0) {
-        i_ += 2;
-        if (ident() != e->name) throw std::runtime_error("mismatched </...> for " + e->name);
-        skip_space();
-        expect('>');
-        return e;
-      }
-      e->children.push_back(element());
-    }
-  }
-  std::string s_;
-  std::size_t i_ = 0;
-};
-
-std::string read_file(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+using vtktest::read_file;
+using vtktest::Xml;
 
 std::unique_ptr<Xml> read_xml(const fs::path& p) {
-  return XmlParser(read_file(p)).document();
+  return vtktest::XmlParser(vtktest::read_file(p)).document();
 }
 
 std::vector<double> numbers(const std::string& text) {
@@ -134,12 +43,14 @@ std::vector<double> numbers(const std::string& text) {
   return v;
 }
 
-// Checks a .vtu: well-formed, every array sized for its points/cells;
-// returns the number of points.
+// Checks a .vtu: well-formed, binary (appended, compressed), every array
+// sized for its points/cells; returns the number of points.
 std::size_t check_vtu(const fs::path& p) {
-  const auto doc = read_xml(p);
+  const vtktest::VtkFile f = vtktest::read_vtk(p);
+  const auto& doc = f.doc;
   EXPECT_EQ(doc->name, "VTKFile");
   EXPECT_EQ(doc->attr.at("type"), "UnstructuredGrid");
+  EXPECT_EQ(doc->attr.at("compressor"), "vtkZLibDataCompressor");
   const Xml* piece = doc->child("UnstructuredGrid")->child("Piece");
   const std::size_t n = std::stoul(piece->attr.at("NumberOfPoints"));
   EXPECT_EQ(std::stoul(piece->attr.at("NumberOfCells")), n);
@@ -149,8 +60,8 @@ std::size_t check_vtu(const fs::path& p) {
   for (const Xml* a : arrays) {
     const std::size_t comps =
         a->attr.count("NumberOfComponents") ? std::stoul(a->attr.at("NumberOfComponents")) : 1;
-    EXPECT_EQ(a->attr.at("format"), "ascii");
-    EXPECT_EQ(numbers(a->text).size(), n * comps) << a->attr.at("Name");
+    EXPECT_EQ(a->attr.at("format"), "appended");
+    EXPECT_EQ(vtktest::values(f, *a).size(), n * comps) << a->attr.at("Name");
     seen[a->attr.at("Name")] = comps;
   }
   for (const auto& [name, comps] : std::map<std::string, std::size_t>{{"radius", 1},
@@ -158,7 +69,6 @@ std::size_t check_vtu(const fs::path& p) {
                                                                       {"group", 1},
                                                                       {"velocity", 3},
                                                                       {"displacement", 3},
-                                                                      {"displacement_magnitude", 1},
                                                                       {"spin", 3},
                                                                       {"force", 3},
                                                                       {"Points", 3},
@@ -171,16 +81,16 @@ std::size_t check_vtu(const fs::path& p) {
 
 // Checks a .vtp: lines between existing points, cell data per line.
 std::size_t check_vtp(const fs::path& p) {
-  const auto doc = read_xml(p);
-  EXPECT_EQ(doc->attr.at("type"), "PolyData");
-  const Xml* piece = doc->child("PolyData")->child("Piece");
+  const vtktest::VtkFile f = vtktest::read_vtk(p);
+  EXPECT_EQ(f.doc->attr.at("type"), "PolyData");
+  const Xml* piece = f.doc->child("PolyData")->child("Piece");
   const std::size_t np = std::stoul(piece->attr.at("NumberOfPoints"));
   const std::size_t nl = std::stoul(piece->attr.at("NumberOfLines"));
   std::vector<const Xml*> arrays;
   piece->find_all("DataArray", arrays);
   for (const Xml* a : arrays) {
     const std::string name = a->attr.count("Name") ? a->attr.at("Name") : "";
-    const auto v = numbers(a->text);
+    const auto v = vtktest::values(f, *a);
     if (name == "Points") EXPECT_EQ(v.size(), 3 * np);
     if (name == "force_N") EXPECT_EQ(v.size(), 3 * nl);
     if (name == "normal_force_N" || name == "overlap_m" || name == "offsets")
@@ -320,9 +230,10 @@ TEST_F(StagedRunTest, ThreeStagesWriteTheRunFolder) {
   const std::size_t left = r.stages[2].end_state.particles;
   EXPECT_EQ(left + r.stages[2].particles_removed, 27u);
 
-  for (const char* f : {"log.txt", "summary.json", "measurements.csv", "scenario.resolved.toml",
-                        "particles.pvd", "contacts.pvd", "stage_00_settle_particles.txt",
-                        "stage_01_change_particles.txt", "stage_02_excavate_particles.txt"})
+  for (const char* f :
+       {"log.txt", "summary.json", "measurements.csv", "scenario.resolved.toml", "particles.pvd",
+        "contacts.pvd", "walls.pvd", "stage_00_settle_particles.txt",
+        "stage_01_change_particles.txt", "stage_02_excavate_particles.txt"})
     EXPECT_TRUE(fs::is_regular_file(out / f)) << f;
 
   // The .pvd series list every frame, in time order, and the files exist.
@@ -355,6 +266,36 @@ TEST_F(StagedRunTest, ThreeStagesWriteTheRunFolder) {
     if (k + 1 == particles.size()) EXPECT_EQ(n, left);
   }
   EXPECT_GT(check_vtp(out / contacts[3].second), 0u); // settled: force chains
+
+  // The walls as surfaces: one quadrilateral per wall, on its plane; x1 (a
+  // 3 mm x 3 mm rectangle at x = 3 mm) is gone after the excavation.
+  const auto walls = read_pvd(out / "walls.pvd");
+  ASSERT_EQ(walls.size(), frames);
+  for (std::size_t k = 0; k < walls.size(); ++k) {
+    SCOPED_TRACE(walls[k].second);
+    EXPECT_EQ(walls[k].first, particles[k].first);
+    const vtktest::VtkFile f = vtktest::read_vtk(out / walls[k].second);
+    const Xml* piece = f.doc->child("PolyData")->child("Piece");
+    const std::size_t nw = std::stoul(piece->attr.at("NumberOfPolys"));
+    // The excavation's first frame replaces the change stage's last (same step).
+    const std::size_t walls_removed_at = r.stages[0].frames + r.stages[1].frames - 1;
+    EXPECT_EQ(nw, k >= walls_removed_at ? 2u : 3u);
+    const auto a = vtktest::arrays(f);
+    ASSERT_EQ(a.at("Points").size(), 12 * nw);
+    ASSERT_EQ(a.at("offsets").size(), nw);
+    EXPECT_EQ(a.at("offsets").back(), 4.0 * static_cast<double>(nw));
+    for (int c = 0; c < 4; ++c) EXPECT_EQ(a.at("Points")[3 * c + 2], 0.0) << "floor corner " << c;
+    if (nw == 3) {
+      for (int c = 0; c < 4; ++c) EXPECT_DOUBLE_EQ(a.at("Points")[24 + 3 * c], 0.003);
+      double ymin = 1, ymax = -1;
+      for (int c = 0; c < 4; ++c)
+        ymin = std::min(ymin, a.at("Points")[25 + 3 * c]),
+        ymax = std::max(ymax, a.at("Points")[25 + 3 * c]);
+      EXPECT_NEAR(ymax - ymin, 0.003, 1e-15); // the rectangle's own size
+    }
+    // The floor carries the grains' weight once they rest on it.
+    if (k == 3) EXPECT_LT(a.at("force_N")[2], 0.0);
+  }
 
   // summary.json
   const auto j = nlohmann::json::parse(read_file(out / "summary.json"));

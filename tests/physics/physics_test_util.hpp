@@ -4,7 +4,7 @@
 // here calls engine internals.
 #pragma once
 
-#include "core/world.hpp"
+#include "engine/world.hpp"
 #include "physics/contact_properties.hpp"
 
 #include <cmath>

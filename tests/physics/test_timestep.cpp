@@ -7,7 +7,7 @@
 // timestep_growth_limit per step; a fixed timestep above the estimate is
 // refused, at the start (InputError) and when the contacts stiffen during a
 // run (InstabilityError, so the command line exits with 3).
-#include "core/errors.hpp"
+#include "base/errors.hpp"
 #include "physics_test_util.hpp"
 
 #include <fmt/format.h>

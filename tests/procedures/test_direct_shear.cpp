@@ -3,8 +3,8 @@
 // positive, and a frictionless assembly's friction angle is far below that
 // of mu = 0.5 with rolling resistance. The shear rate is raised to
 // keep CI short (20 mm/s); the paper-size runs use 200 mm/min (ctest -L long).
-#include "core/errors.hpp"
-#include "core/interrupt.hpp"
+#include "base/errors.hpp"
+#include "base/interrupt.hpp"
 #include "procedures/direct_shear.hpp"
 #include "procedures/paper_material.hpp"
 #include "procedures/specimen.hpp"

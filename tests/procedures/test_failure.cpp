@@ -5,8 +5,8 @@
 // with no sliding mass, a 45-degree frictionless one failed with a slide that
 // starts at the face and runs out beyond the toe. The two guard each other: a
 // monitor that always said "failed" (or "stable") fails one of them.
-#include "core/errors.hpp"
-#include "core/world.hpp"
+#include "base/errors.hpp"
+#include "engine/world.hpp"
 #include "procedures/failure.hpp"
 #include "procedures/paper_material.hpp"
 #include "procedures/slope_geometry.hpp"

@@ -6,8 +6,8 @@
 // prepared foundation is homogeneous, stood above the design before it was
 // trimmed to it, and is cached; the layer porosity and the kinetic-energy
 // ratio against closed forms.
-#include "core/errors.hpp"
-#include "core/world.hpp"
+#include "base/errors.hpp"
+#include "engine/world.hpp"
 #include "io/checkpoint.hpp"
 #include "io/shear_config.hpp"
 #include "io/slope_config.hpp"

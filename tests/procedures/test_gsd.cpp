@@ -1,7 +1,7 @@
 // Grain size distribution: sieve tables, explicit bins, the paper's
 // truncation rule, target statistics, drawing radii, and the messages a bad
 // distribution stops with (issue 3, acceptance 1 and 5).
-#include "core/errors.hpp"
+#include "base/errors.hpp"
 #include "io/specimen_config.hpp"
 #include "procedures/gsd.hpp"
 
@@ -190,4 +190,24 @@ TEST(Gsd, DrawnRadiiMatchTheGradation) {
       EXPECT_LE(2 * r, 1.0e-3);
     }
   }
+}
+
+// The curves of the gsd.png picture `generate` draws: percent passing by mass
+// (volume) against diameter, closed form.
+TEST(GrainSizeCurves, PassingByMassOfParticlesAndOfTheTargetBins) {
+  // Radii 1, 1, 2 (volumes 1, 1, 8 in units of 4/3 pi): 20 % at d = 2, 100 % at d = 4.
+  const auto c = passing_curve({2.0, 1.0, 1.0});
+  ASSERT_EQ(c.size(), 3u);
+  EXPECT_DOUBLE_EQ(c[0].first, 2.0);
+  EXPECT_DOUBLE_EQ(c[0].second, 10.0);
+  EXPECT_DOUBLE_EQ(c[1].second, 20.0);
+  EXPECT_DOUBLE_EQ(c[2].first, 4.0);
+  EXPECT_DOUBLE_EQ(c[2].second, 100.0);
+  // Bins: 0 at the smallest d_min, then the cumulative fraction at each d_max.
+  const auto t = target_passing_curve({{0.25e-3, 0.425e-3, 0.7}, {0.425e-3, 0.85e-3, 0.3}});
+  ASSERT_EQ(t.size(), 3u);
+  EXPECT_EQ(t[0], std::make_pair(0.25e-3, 0.0));
+  EXPECT_DOUBLE_EQ(t[1].first, 0.425e-3);
+  EXPECT_DOUBLE_EQ(t[1].second, 70.0);
+  EXPECT_DOUBLE_EQ(t[2].second, 100.0);
 }

@@ -4,7 +4,7 @@
 // for phi = 0 toe circles (Taylor, D.W. 1937, Stability of earth slopes,
 // J. Boston Soc. Civ. Eng. 24(3):197-246); the infinite-slope limit for
 // c = 0; a published c-phi benchmark; the consistency of the critical g-level.
-#include "core/errors.hpp"
+#include "base/errors.hpp"
 #include "physics/body_field.hpp"
 #include "procedures/limit_equilibrium.hpp"
 

@@ -4,7 +4,7 @@
 // and x 0.5 at the top. Closed form: the contact whose mean centre height z lies in band
 // b = floor(4 z / H) (the end bands extended below 0 and above H) carries
 // F0 x (1.5 - (b + 0.5) / 4), that is 1.375, 1.125, 0.875 and 0.625 F0; nothing else changes.
-#include "core/world.hpp"
+#include "engine/world.hpp"
 #include "io/slope_config.hpp"
 #include "procedures/paper_material.hpp"
 #include "procedures/slope_trial.hpp"

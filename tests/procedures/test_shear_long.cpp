@@ -5,7 +5,7 @@
 // issue's acceptance (servo within 2 %, no particle lost, peaks rising with
 // the normal stress, dry peak fit R^2 > 0.98, humid cohesion above dry).
 // See docs/shear.md for the measured run times (hours per pressure).
-#include "core/world.hpp"
+#include "engine/world.hpp"
 #include "io/csv.hpp"
 #include "io/shear_config.hpp"
 #include "procedures/direct_shear.hpp"

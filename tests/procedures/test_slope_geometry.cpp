@@ -4,8 +4,8 @@
 // foundation; 30,044 after the cut for the lower first bench, 31,020 for the
 // higher one). For a uniform specimen the removed particle fraction equals
 // the excavated area fraction of the section.
-#include "core/errors.hpp"
-#include "core/world.hpp"
+#include "base/errors.hpp"
+#include "engine/world.hpp"
 #include "procedures/slope_geometry.hpp"
 
 #include <gtest/gtest.h>

@@ -4,7 +4,7 @@
 // safety depends on c / (gamma H) and phi only, so the critical g is
 // proportional to c, inversely proportional to the bulk density, and the same
 // at any size reduction factor s (H goes with s, the DEM's gamma with n / s).
-#include "core/errors.hpp"
+#include "base/errors.hpp"
 #include "io/slope_config.hpp"
 #include "procedures/foundation.hpp"
 #include "procedures/slope_stability.hpp"

@@ -5,11 +5,13 @@
 // low g stands, and a trial stopped (as by SIGINT) twice - in the foundation
 // stage and after the failure onset - and resumed from its checkpoints ends
 // bit for bit where an uninterrupted one does (issue 6, items 1 and 3).
-#include "core/errors.hpp"
-#include "core/interrupt.hpp"
+#include "base/errors.hpp"
+#include "base/interrupt.hpp"
 #include "io/slope_config.hpp"
 #include "procedures/slope_trial.hpp"
+#include "vtk_test_util.hpp"
 
+#include <algorithm>
 #include <csignal>
 #include <filesystem>
 #include <fmt/format.h>
@@ -236,6 +238,71 @@ TEST_F(SlopeTrialTest, SteppedScheduleRaisesGOnOneModelUntilItSlides) {
   for (std::size_t k = 1; k < r.levels.size(); ++k)
     EXPECT_EQ(r.levels[k].first_step, r.levels[k - 1].first_step + r.levels[k - 1].steps);
   EXPECT_EQ(r.foundation.particles, r.excavated + r.slope_particles);
+}
+
+// One time axis (issue 19): every frame's time since the cut is the same
+// number in frames.csv, the log, the picture's title and the three ParaView
+// series; the first frame is the cut (t = 0); the last frame flags the
+// sliding mass the report describes.
+TEST_F(SlopeTrialTest, OneTimeAxisInTheLogThePicturesAndTheParaViewSeries) {
+  SlopeScenario sc = tiny(true);
+  sc.output.vtk = true;
+  SlopeTrialPlan plan;
+  plan.g_levels = {20};
+  std::vector<std::string> log;
+  const SlopeTrialResult r = run_slope_trial(sc, plan, options("axis", &log));
+  ASSERT_EQ(r.levels.at(0).report.state, SlopeState::failed);
+  const fs::path d = dir_ / "axis";
+
+  auto pvd = [&](const char* name) {
+    const vtktest::VtkFile f = vtktest::read_vtk(d / name);
+    std::vector<std::pair<double, std::string>> out;
+    for (const auto& e : f.doc->child("Collection")->children)
+      out.emplace_back(std::stod(e->attr.at("timestep")), e->attr.at("file"));
+    return out;
+  };
+  const auto particles = pvd("slope.pvd"), contacts = pvd("slope_contacts.pvd"),
+             walls = pvd("slope_walls.pvd");
+  std::istringstream csv(slurp(d / "frames.csv"));
+  std::string line;
+  std::getline(csv, line);
+  EXPECT_EQ(line, "frame,time_after_cut_s,step,g_level,picture,title");
+  std::size_t k = 0;
+  for (; std::getline(csv, line); ++k) {
+    SCOPED_TRACE(line);
+    std::vector<std::string> c;
+    std::stringstream ls(line);
+    for (std::string cell; std::getline(ls, cell, ',');) c.push_back(cell);
+    ASSERT_EQ(c.size(), 6u);
+    EXPECT_EQ(std::stoul(c[0]), k);
+    const double t = std::stod(c[1]);
+    if (k == 0) EXPECT_EQ(t, 0.0) << "the first frame is the cut";
+    ASSERT_LT(k, particles.size());
+    EXPECT_EQ(particles[k].first, t);
+    EXPECT_EQ(contacts[k].first, t);
+    EXPECT_EQ(walls[k].first, t);
+    EXPECT_EQ(particles[k].second, fmt::format("frames/particles_{:04d}.vtu", k));
+    EXPECT_TRUE(fs::exists(d / c[4])) << c[4];
+    const std::string shown = fmt::format("t = {:.5f} s after the cut", t);
+    EXPECT_NE(c[5].find(shown), std::string::npos) << "picture title: " << c[5];
+    const std::string logged = fmt::format("frame {}: {}, step {}", k, shown, c[2]);
+    EXPECT_TRUE(std::any_of(log.begin(), log.end(),
+                            [&](const std::string& l) { return l.find(logged) != l.npos; }))
+        << "no log line with: " << logged;
+  }
+  EXPECT_EQ(k, particles.size());
+  EXPECT_GE(k, 3u);
+
+  // The last frame: the sliding mass flagged, as many particles as reported.
+  const vtktest::VtkFile last = vtktest::read_vtk(d / particles.back().second);
+  const auto a = vtktest::arrays(last);
+  double flagged = 0;
+  for (double v : a.at("sliding")) flagged += v;
+  EXPECT_EQ(flagged, static_cast<double>(r.levels[0].report.particles));
+  EXPECT_GT(flagged, 100.0);
+  // The first (at the cut): nothing slides yet.
+  const auto first = vtktest::arrays(vtktest::read_vtk(d / particles.front().second));
+  for (double v : first.at("sliding")) ASSERT_EQ(v, 0.0);
 }
 
 } // namespace

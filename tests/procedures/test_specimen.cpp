@@ -4,8 +4,8 @@
 //   acceptance 2: PaperShearBoxFromBricks, PaperFoundationFromBricks
 //   acceptance 3: TiledDenseBrickIsSeamless
 //   acceptance 4: SameSeedSameBrickOtherSeedSameStatistics
-#include "core/errors.hpp"
-#include "core/world.hpp"
+#include "base/errors.hpp"
+#include "engine/world.hpp"
 #include "io/specimen_config.hpp"
 #include "procedures/gsd.hpp"
 #include "procedures/specimen.hpp"
@@ -152,7 +152,7 @@ TEST(Specimen, PaperShearBoxFromBricks) {
   std::filesystem::remove_all(dir);
   write_specimen_outputs(w, built, spec, dir.string());
   for (const char* f :
-       {"specimen.vtu", "specimen.xyzr", "specimen.json", "specimen.toml", "brick.json"})
+       {"specimen.vtu", "specimen.xyzr", "specimen.json", "specimen.toml", "brick.json", "gsd.png"})
     EXPECT_TRUE(std::filesystem::exists(dir / f)) << f;
   std::ifstream in(dir / "specimen.json");
   const nlohmann::json j = nlohmann::json::parse(in);

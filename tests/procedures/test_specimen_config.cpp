@@ -1,6 +1,6 @@
 // The [specimen] table: every key checked (type, range, unknown with
 // did-you-mean, required), paths relative to the scenario, the examples.
-#include "core/errors.hpp"
+#include "base/errors.hpp"
 #include "io/specimen_config.hpp"
 #include "procedures/gsd.hpp"
 

@@ -1,6 +1,6 @@
 // Servo-controlled wall: a lid pressed onto a granular layer holds the target
 // force. PFC-style servo: v = alpha (F_target - F) / (sum kn dt).
-#include "core/world.hpp"
+#include "engine/world.hpp"
 #include "procedures/paper_material.hpp"
 
 #include <cmath>

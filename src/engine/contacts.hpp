@@ -6,7 +6,7 @@
 // a neighbour that is not touching.
 #pragma once
 
-#include "core/vec3.hpp"
+#include "base/vec3.hpp"
 #include "physics/contact_law.hpp"
 
 #include <cstdint>

@@ -3,7 +3,7 @@
 // arrays can later live on a device. All SI.
 #pragma once
 
-#include "core/vec3.hpp"
+#include "base/vec3.hpp"
 
 #include <cstdint>
 #include <span>

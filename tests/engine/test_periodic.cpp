@@ -1,5 +1,5 @@
 // Periodic boundaries and contact records.
-#include "core/world.hpp"
+#include "engine/world.hpp"
 
 #include <gtest/gtest.h>
 #include <random>

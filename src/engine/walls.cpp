@@ -1,6 +1,6 @@
-#include "core/walls.hpp"
+#include "engine/walls.hpp"
 
-#include "core/errors.hpp"
+#include "base/errors.hpp"
 
 #include <fmt/format.h>
 

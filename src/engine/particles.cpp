@@ -1,4 +1,4 @@
-#include "core/particles.hpp"
+#include "engine/particles.hpp"
 
 #include <numbers>
 

@@ -3,9 +3,9 @@
 // public calls; they never reach into the loops.
 #pragma once
 
-#include "core/contacts.hpp"
-#include "core/particles.hpp"
-#include "core/walls.hpp"
+#include "engine/contacts.hpp"
+#include "engine/particles.hpp"
+#include "engine/walls.hpp"
 #include "physics/body_field.hpp"
 #include "physics/contact_properties.hpp"
 
@@ -195,7 +195,7 @@ public:
   std::size_t neighbour_entries() const { return bb_.entries(); }
   long neighbour_rebuilds() const { return rebuilds_; }
   // OpenMP threads that ran the last step's integration (1 below 2,000
-  // particles; see thread_count in world.cpp).
+  // particles; see engine/thread_count.hpp).
   int threads_used() const { return threads_used_; }
 
   // Forces a rebuild of the neighbour lists (and re-sort) before the next step.

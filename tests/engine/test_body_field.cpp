@@ -1,5 +1,5 @@
 // Body fields: the centrifuge field against its closed form.
-#include "core/world.hpp"
+#include "engine/world.hpp"
 
 #include <gtest/gtest.h>
 

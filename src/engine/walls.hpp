@@ -4,7 +4,7 @@
 // infinite-radius, infinite-mass limit of a ball for the contact law.
 #pragma once
 
-#include "core/vec3.hpp"
+#include "base/vec3.hpp"
 
 #include <algorithm>
 #include <cstdint>

@@ -1,4 +1,4 @@
-// Runs that blow up (core/errors.hpp: InstabilityError, exit code 3): an
+// Runs that blow up (base/errors.hpp: InstabilityError, exit code 3): an
 // overlap beyond max_overlap_fraction of the smaller radius (ball-ball and
 // ball-wall) and a non-finite position. The World names the particles, the
 // step and a likely cause; `centridem run` prints it after
@@ -9,9 +9,9 @@
 // (the dynamic overshoot reaches twice the static overlap) it must pass the
 // guard 0.5 R, so the run is stopped within the first half period
 // pi sqrt(m/kn) of the contact.
+#include "base/errors.hpp"
 #include "cli_test_util.hpp"
-#include "core/errors.hpp"
-#include "core/world.hpp"
+#include "engine/world.hpp"
 #include "physics/contact_properties.hpp"
 #include "scenario_fixtures.hpp"
 

@@ -1,0 +1,116 @@
+// Integration: gathers the forces on each particle, applies Cundall local
+// damping and advances it by central differences; moves the walls, sums the
+// forces on them and runs their servos; flags a rebuild when anything moved
+// half the skin.
+#include "engine/thread_count.hpp"
+#include "engine/world.hpp"
+
+#include "base/errors.hpp"
+#include "physics/damping.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <fmt/format.h>
+#include <omp.h>
+
+namespace centridem {
+
+void World::integrate() {
+  const std::size_t n = p_.size();
+  const double dt = dt_;
+  const double alpha = settings_.local_damping;
+  auto& P = p_;
+  double max_move2 = 0.0;
+  std::uint32_t bad = UINT32_MAX;
+
+  int team = 1;
+#pragma omp parallel num_threads(thread_count(settings_, n))
+  {
+#pragma omp single nowait
+    team = omp_get_num_threads();
+#pragma omp for schedule(static) reduction(max : max_move2) reduction(min : bad)
+    for (std::size_t i = 0; i < n; ++i) {
+      // Own side was summed by compute_contacts; add the forces from the
+      // contacts in which i is the second end (zero for non-touching entries).
+      Vec3 f = P.force[i];
+      Vec3 mo = P.moment[i];
+      for (std::uint32_t k = bb_.incoming_offset[i]; k < bb_.incoming_offset[i + 1]; ++k) {
+        const std::uint32_t e = bb_.incoming[k];
+        f += bb_.force_on_2[e];
+        mo += bb_.moment_on_2[e];
+      }
+      P.force[i] = f;
+      P.moment[i] = mo;
+      // Central differences (PFC): v(t+dt/2) = v(t-dt/2) + (F + Fd)/m dt.
+      if (!(P.flags[i] & fix_translation))
+        P.velocity[i] += (f + local_damping_force(f, P.velocity[i], alpha)) * (dt / P.mass[i]);
+      if (!(P.flags[i] & fix_rotation))
+        P.spin[i] += (mo + local_damping_force(mo, P.spin[i], alpha)) * (dt / P.inertia[i]);
+      const Vec3 dx = P.velocity[i] * dt;
+      P.position[i] += dx;
+      P.displacement[i] += dx;
+      if (!is_finite(P.position[i]) || !is_finite(P.spin[i]))
+        bad = std::min(bad, static_cast<std::uint32_t>(i));
+      max_move2 = std::max(max_move2, norm2(P.position[i] - position_at_build_[i]));
+    }
+  }
+  threads_used_ = team;
+
+  if (bad != UINT32_MAX)
+    throw InstabilityError(fmt::format(
+        "unstable at step {}: particle id {} has a non-finite position or spin (NaN/inf). Likely "
+        "cause: timestep too large for the contact stiffness (critical estimate {:.3g} s, "
+        "timestep {:.3g} s), or an input that produced an infinite force.",
+        step_, P.id[bad], critical_timestep(), dt_));
+
+  // Walls: prescribed motion, and the force the balls exert on them.
+  double max_wall_move = 0.0;
+  for (std::size_t k = 0; k < walls_.size(); ++k) {
+    walls_[k].point += walls_[k].velocity * dt;
+    wall_motion_since_build_[k] += walls_[k].velocity * dt;
+    walls_[k].force = {};
+    walls_[k].contact_count = 0;
+    max_wall_move = std::max(max_wall_move, norm(wall_motion_since_build_[k]));
+  }
+  bool any_servo = false;
+  for (Wall& wl : walls_) {
+    wl.normal_stiffness_N_per_m = 0.0;
+    any_servo = any_servo || wl.servo.active;
+  }
+  for (std::size_t e = 0; e < bw_.entries(); ++e) {
+    if (bw_.properties[e] == kNoContact) continue;
+    Wall& wl = walls_[bw_.wall[e]];
+    wl.force += bw_.force_on_wall[e];
+    ++wl.contact_count;
+    if (wl.servo.active) {
+      const double R = p_.radius[bw_.ball[e]];
+      const ContactGeometry g{{}, 0.0, {}, {}, R, R, R, 0.0};
+      wl.normal_stiffness_N_per_m += contact_stiffness(props_[bw_.properties[e]], g).kn;
+    }
+  }
+  if (any_servo) {
+    for (Wall& wl : walls_) {
+      if (!wl.servo.active) continue;
+      WallServo& sv = wl.servo;
+      const double measured = -dot(wl.force, sv.direction); // balls push against `direction`
+      const double error = sv.target_force_N - measured;
+      const double demand = sv.integral_time_s > 0
+                                ? error + sv.error_integral_N_s / sv.integral_time_s
+                                : error; // [N]
+      const double free_speed = wl.normal_stiffness_N_per_m > 0
+                                    ? sv.gain_factor * demand / (wl.normal_stiffness_N_per_m * dt)
+                                    : (demand > 0 ? sv.max_speed_m_per_s : -sv.max_speed_m_per_s);
+      const double speed = std::clamp(free_speed, -sv.max_speed_m_per_s, sv.max_speed_m_per_s);
+      if (sv.integral_time_s > 0 && (speed == free_speed || error * free_speed < 0))
+        sv.error_integral_N_s += error * dt;
+      wl.velocity =
+          wl.velocity - dot(wl.velocity, sv.direction) * sv.direction + speed * sv.direction;
+    }
+  }
+
+  const double max_move = std::sqrt(max_move2);
+  const double s = skin();
+  if (2.0 * max_move > s || max_move + max_wall_move > s) dirty_ = true;
+}
+
+} // namespace centridem
