@@ -8,6 +8,7 @@
 #include "io/slope_config.hpp"
 #include "io/vtk_read.hpp"
 #include "procedures/slope_geometry.hpp"
+#include "procedures/slope_trial.hpp"
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
@@ -154,6 +155,12 @@ std::vector<double> field_values(const VtuArrays& a, const std::string& field) {
   return v;
 }
 
+// log10 of each value; NaN (a gap in the line) where it is not positive.
+std::vector<double> log10_values(std::vector<double> v) {
+  for (double& x : v) x = x > 0 ? std::log10(x) : NAN;
+  return v;
+}
+
 void plot_checks(const fs::path& dir, const fs::path& out) {
   if (!fs::exists(dir / "checks.csv")) return;
   const std::string file = (dir / "checks.csv").string();
@@ -173,9 +180,7 @@ void plot_checks(const fs::path& dir, const fs::path& out) {
   speed.add("", time, s);
   ratio.title = "slope's mean unbalanced-force ratio";
   ratio.y_label = "log10 ratio";
-  auto r = t.numbers("unbalanced_force_ratio", file);
-  for (double& x : r) x = x > 0 ? std::log10(x) : NAN;
-  ratio.add("", time, r);
+  ratio.add("", time, log10_values(t.numbers("unbalanced_force_ratio", file)));
   render_panels((out / "checks.png").string(), {mass, speed, ratio}, 3, 600, 450);
 }
 
@@ -189,14 +194,10 @@ void plot_measurements(const fs::path& dir, const fs::path& out) {
   ratio.x_label = energy.x_label = coordination.x_label = "time (s)";
   ratio.title = "mean unbalanced-force ratio";
   ratio.y_label = "log10 ratio";
-  auto r = t.numbers("ratio", file);
-  for (double& x : r) x = x > 0 ? std::log10(x) : NAN;
-  ratio.add("", time, r);
+  ratio.add("", time, log10_values(t.numbers("ratio", file)));
   energy.title = "kinetic energy";
   energy.y_label = "log10 energy (J)";
-  auto e = t.numbers("kinetic_energy_J", file);
-  for (double& x : e) x = x > 0 ? std::log10(x) : NAN;
-  energy.add("", time, e);
+  energy.add("", time, log10_values(t.numbers("kinetic_energy_J", file)));
   coordination.title = "coordination number";
   coordination.y_label = "contacts per particle";
   coordination.add("", time, t.numbers("coordination_number", file));
@@ -216,7 +217,6 @@ int run_render_command(const RenderOptions& o) {
     throw InputError("--section", fmt::format("{}", fmt::join(o.section, ",")),
                      "two numbers Y_MID,HALF_THICKNESS in m, the half thickness > 0");
   const std::vector<Source> all = sources(fs::path(o.run_dir));
-  std::size_t pictures = 0;
   for (const Source& s : all) {
     const fs::path out = o.out_dir.empty() ? s.dir / ("render_" + o.field)
                          : all.size() == 1 ? fs::path(o.out_dir)
@@ -259,17 +259,10 @@ int run_render_command(const RenderOptions& o) {
     base.width_px = o.width_px > 0 ? o.width_px
                     : s.scenario   ? s.scenario->output.picture_width_px
                                    : 1200;
-    if (s.scenario) {
-      const SlopeGeometry geometry(s.scenario->slope);
-      for (const SectionPoint& q : geometry.outline()) {
-        base.outline.x.push_back(q.x);
-        base.outline.z.push_back(q.z);
-      }
-      base.window = SideViewWindow{-0.02 * geometry.length(), 1.02 * geometry.length(),
-                                   -0.03 * geometry.height(), 1.08 * geometry.height()};
-    } else {
+    if (s.scenario)
+      frame_slope_picture(SlopeGeometry(s.scenario->slope), base); // as the trial framed them
+    else
       base.outline = {};
-    }
     for (std::size_t k = 0; k < frames.size(); ++k) {
       const VtuArrays& a = frames[k];
       SideViewInput in = base;
@@ -287,7 +280,6 @@ int run_render_command(const RenderOptions& o) {
       const std::string png =
           s.frames[k].png.empty() ? fmt::format("frame_{:04d}.png", k) : s.frames[k].png;
       render_side_view(in, (out / png).string());
-      ++pictures;
     }
     if (s.trial)
       plot_checks(s.dir, out);
@@ -297,7 +289,7 @@ int run_render_command(const RenderOptions& o) {
                s.trial ? ", checks.png" : ", measurements.png", out.string());
   }
   std::fflush(stdout);
-  return pictures > 0 ? 0 : 0;
+  return 0;
 }
 
 CLI::App* add_render_subcommand(CLI::App& app) {

@@ -173,6 +173,17 @@ BodyField slope_field(const SlopeScenario& sc, const SlopeGeometry& g, double g_
                                sc.field.coriolis);
 }
 
+void frame_slope_picture(const SlopeGeometry& geometry, SideViewInput& in) {
+  in.outline.x.clear();
+  in.outline.z.clear();
+  for (const SectionPoint& q : geometry.outline()) {
+    in.outline.x.push_back(q.x);
+    in.outline.z.push_back(q.z);
+  }
+  in.window = SideViewWindow{-0.02 * geometry.length(), 1.02 * geometry.length(),
+                             -0.03 * geometry.height(), 1.08 * geometry.height()};
+}
+
 SlopeTrialResult run_slope_trial(const SlopeScenario& sc, const SlopeTrialPlan& plan,
                                  const SlopeTrialOptions& o) {
   if (plan.g_levels.empty()) throw InputError("g-levels", "(none)", "at least one g-level");
@@ -354,8 +365,6 @@ SlopeTrialResult run_slope_trial(const SlopeScenario& sc, const SlopeTrialPlan& 
     std::string line;
     for (int k = 0; std::getline(in, line) && k <= pr.frames; ++k) frames_csv += line + "\n";
   }
-  SideViewWindow window{-0.02 * geometry.length(), 1.02 * geometry.length(),
-                        -0.03 * geometry.height(), 1.08 * geometry.height()};
   // The limit-equilibrium circle at the level's g (drawn on every picture).
   std::optional<std::pair<double, LeSearchResult>> le_circle;
   auto limit_equilibrium_line = [&](double g_level) -> std::optional<SideViewPolyline> {
@@ -390,10 +399,7 @@ SlopeTrialResult run_slope_trial(const SlopeScenario& sc, const SlopeTrialPlan& 
     }
     in.vmin = sc.output.colour_min_m;
     in.vmax = sc.output.colour_max_m;
-    for (const SectionPoint& q : geometry.outline()) {
-      in.outline.x.push_back(q.x);
-      in.outline.z.push_back(q.z);
-    }
+    frame_slope_picture(geometry, in);
     if (monitor && monitor->failed() && !monitor->report().slip_surface.empty()) {
       SideViewPolyline slip;
       for (const SectionPoint& q : monitor->report().slip_surface) {
@@ -414,7 +420,6 @@ SlopeTrialResult run_slope_trial(const SlopeScenario& sc, const SlopeTrialPlan& 
     in.title = fmt::format("{} — {:g} g — t = {:.5f} s after the cut{} — step {} — {}",
                            sc.name.empty() ? std::string("benched slope") : sc.name, g_level, t,
                            level_start, world.step_count(), state);
-    in.window = window;
     in.width_px = sc.output.picture_width_px;
     const std::string name = fmt::format("pictures/frame_{:04d}.png", pr.frames);
     render_side_view(in, (dir / name).string());

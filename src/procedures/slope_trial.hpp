@@ -44,6 +44,7 @@ namespace centridem {
 
 class World;
 struct BodyField;
+struct SideViewInput;
 
 struct SlopeTrialPlan {
   std::vector<double> g_levels; // one level: a trial; several: a stepped schedule
@@ -93,6 +94,11 @@ std::size_t grade_attraction_by_height(World& world, const ContactProperties& ba
                                        const MoistureSpec& moisture, double height_m);
 
 BodyField slope_field(const SlopeScenario& sc, const SlopeGeometry& geometry, double g_level);
+
+// The framing every picture of a trial shares: the window (the slope's
+// section with a small margin) and the undeformed outline, set on `in`.
+// `centridem render` frames its pictures the same way.
+void frame_slope_picture(const SlopeGeometry& geometry, SideViewInput& in);
 
 // Runs (or resumes) the trial in options.dir. Throws InputError for bad
 // input, InstabilityError if it goes unstable (the last checkpoint stays),
