@@ -8,6 +8,8 @@
 #
 # Usage (from the repo root):  bash bench/run_peers.sh [--steps N] [--packing FILE]
 #   [--warmup N] [--procs "1 2"] [--codes "lammps liggghts_rolling liggghts_cohesion"]
+#   (code lammps_flow: the flowing workload, bench/peers/lammps_flow.in; give it --steps 100000
+#   --warmup 0 to match `centridem bench --workload flowing --law peers --steps 100000 --warmup 0`)
 #   [--repeat R] [--workdir DIR] [--keep]
 # Install the peers first:  apt-get update && apt-get install -y lammps liggghts
 # Environment: PEER_MPIRUN_ARGS (default "--bind-to none"), PEER_TIMEOUT_S (default 900).
@@ -27,7 +29,7 @@ repeat=1
 workdir=""
 keep=0
 
-usage() { sed -n '2,14p' "${BASH_SOURCE[0]}" | sed 's/^# \{0,1\}//'; }
+usage() { sed -n '2,16p' "${BASH_SOURCE[0]}" | sed 's/^# \{0,1\}//'; }
 
 while [ $# -gt 0 ]; do
   case "$1" in
@@ -91,13 +93,14 @@ command -v mpirun >/dev/null 2>&1 || have_mpirun=0
 # code name -> binary, input script, model description
 code_bin() {
   case "$1" in
-    lammps) echo lmp ;;
+    lammps|lammps_flow) echo lmp ;;
     liggghts_*) echo liggghts ;;
   esac
 }
 code_in() {
   case "$1" in
     lammps) echo "$peers/lammps_granular.in" ;;
+    lammps_flow) echo "$peers/lammps_flow.in" ;;
     liggghts_rolling) echo "$peers/liggghts_rolling.in" ;;
     liggghts_cohesion) echo "$peers/liggghts_cohesion.in" ;;
   esac
@@ -105,13 +108,14 @@ code_in() {
 code_model() {
   case "$1" in
     lammps) echo "granular:hooke+linear_history+rolling_sds" ;;
+    lammps_flow) echo "flowing:granular:hooke+linear_history+rolling_sds" ;;
     liggghts_rolling) echo "gran:hooke/stiffness+history+rolling_friction_epsd2" ;;
     liggghts_cohesion) echo "gran:hooke/stiffness+history+cohesion_sjkr+rolling_friction_epsd2" ;;
   esac
 }
 code_label() {
   case "$1" in
-    lammps) echo "lammps" ;;
+    lammps|lammps_flow) echo "lammps" ;;
     liggghts_*) echo "liggghts" ;;
   esac
 }

@@ -42,7 +42,7 @@ std::string kpa_label(double sigma_Pa) {
   return fmt::format("{:g}", sigma_Pa / 1000.0);
 }
 std::string run_stem(double sigma_Pa) {
-  return "shear_" + kpa_label(sigma_Pa) + "kPa";
+  return shear_run_stem(sigma_Pa);
 }
 
 double angle_deg(double tau, double sigma) {
@@ -320,6 +320,10 @@ void write_plots(const ShearScenario& sc, const std::vector<double>& sigmas,
 
 } // namespace
 
+std::string shear_run_stem(double normal_stress_Pa) {
+  return "shear_" + kpa_label(normal_stress_Pa) + "kPa";
+}
+
 int run_shear_command(const ShearCommandOptions& o) {
   const auto t0 = Clock::now();
   install_stop_handlers();
@@ -452,9 +456,10 @@ int run_shear_command(const ShearCommandOptions& o) {
     if (report_only)
       throw InputError("--report", out.string(), "holds no finished run and no curve yet");
     if (interrupted) {
-      fmt::print(stderr,
-                 "centridem shear: interrupted; continue with `centridem shear --resume {}`\n",
-                 out.string());
+      if (o.resume_hint)
+        fmt::print(stderr,
+                   "centridem shear: interrupted; continue with `centridem shear --resume {}`\n",
+                   out.string());
       return failed_rc;
     }
     if (failed_rc == 3) throw InstabilityError("every run failed (see the messages above)");
@@ -533,10 +538,11 @@ int run_shear_command(const ShearCommandOptions& o) {
              format_duration(seconds_since(t0)));
   std::fflush(stdout);
   if (interrupted) {
-    fmt::print(stderr,
-               "centridem shear: interrupted with {} of {} runs finished; continue with "
-               "`centridem shear --resume {}`\n",
-               runs.size(), sigmas.size(), out.string());
+    if (o.resume_hint)
+      fmt::print(stderr,
+                 "centridem shear: interrupted with {} of {} runs finished; continue with "
+                 "`centridem shear --resume {}`\n",
+                 runs.size(), sigmas.size(), out.string());
     return failed_rc;
   }
   if (failed_rc != 0) {

@@ -33,7 +33,13 @@ struct ShearCommandOptions {
   double progress_interval_s = 10.0; // seconds between progress lines
   std::vector<std::string> set;      // --set KEY=VALUE over the scenario
   bool check = false;                // --check: print the resolved scenario, run nothing
+  bool resume_hint = true;           // print "continue with centridem shear --resume" when stopped
+                                     // (false inside `calibrate`, which prints its own)
 };
+
+// "shear_<kPa>kPa": the stem of one pressure's files in a run folder
+// (shear_<kPa>kPa.json holds a finished run's result and curve).
+std::string shear_run_stem(double normal_stress_Pa);
 
 // Runs the command; returns the exit code (0; 128 + signal when stopped, with
 // checkpoints written). Throws InputError for bad input and InstabilityError

@@ -2,6 +2,7 @@
 // unstable, 128 + signal stopped by SIGINT / SIGTERM after a checkpoint, 1 any
 // other failure.
 #include "app/cli.hpp"
+#include "app/cmd_calibrate.hpp"
 #include "app/cmd_generate.hpp"
 #include "app/cmd_render.hpp"
 #include "app/cmd_shear.hpp"
@@ -16,6 +17,7 @@
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <fmt/format.h>
+#include <map>
 
 using namespace centridem;
 
@@ -24,11 +26,17 @@ namespace {
 int run_bench_command(const BenchOptions& o) {
   for (int t : o.threads) {
     const BenchResult r = run_bench(o, t);
-    fmt::print("threads: {}\nparticles: {}\nsteps: {}\nwall_seconds: {:.3f}\n"
-               "contacts_per_particle: {:.3f}\nneighbour_entries_per_particle: {:.3f}\n"
-               "bytes_per_particle: {}\nneighbour_rebuilds: {}\nparticle_steps_per_s: {:.4g}\n\n",
-               r.threads, r.particles, r.steps, r.wall_seconds, r.contacts_per_particle,
-               r.neighbours_per_particle, r.bytes_per_particle, r.rebuilds, r.particle_steps_per_s);
+    fmt::print(
+        "law: {}\nworkload: {}\nthreads: {}\nparticles: {}\nsteps: {}\nwall_seconds: {:.3f}\n"
+        "contacts_per_particle: {:.3f}\nball_ball_contacts_per_particle: {:.3f}\n"
+        "neighbour_entries_per_particle: {:.3f}\n"
+        "bytes_per_particle: {}\nneighbour_rebuilds: {}\nparticle_steps_per_s: {:.4g}\n"
+        "time_share_neighbour_search: {:.3f}\ntime_share_contact_pass: {:.3f}\n"
+        "time_share_integration: {:.3f}\n\n",
+        to_string(o.law), to_string(o.workload), r.threads, r.particles, r.steps, r.wall_seconds,
+        r.contacts_per_particle, r.ball_ball_contacts_per_particle, r.neighbours_per_particle,
+        r.bytes_per_particle, r.rebuilds, r.particle_steps_per_s, r.share_neighbour_search,
+        r.share_contact_pass, r.share_integration);
     std::fflush(stdout);
   }
   return 0;
@@ -95,12 +103,30 @@ int main(int argc, char** argv) {
   cmd_bench->add_option("--threads", bench.threads, "thread counts to run, one run each")
       ->capture_default_str()
       ->check(cli::whole_number(1, cli::kMaxThreads));
+  cmd_bench
+      ->add_option("--law", bench.law,
+                   "contact law: paper (Table 1's ARRLM, E*-based) or peers (the peer "
+                   "codes' kn = 5e4 N/m rolling law, bench/peers)")
+      ->transform(CLI::CheckedTransformer(
+          std::map<std::string, BenchLaw>{{"paper", BenchLaw::paper}, {"peers", BenchLaw::peers}},
+          CLI::ignore_case))
+      ->default_str("paper");
+  cmd_bench
+      ->add_option("--workload", bench.workload,
+                   "packed (the packing at rest in its box) or flowing (its left half "
+                   "released at 600 g: a collapsing column; use about 1e5 --steps)")
+      ->transform(CLI::CheckedTransformer(
+          std::map<std::string, BenchWorkload>{{"packed", BenchWorkload::packed},
+                                               {"flowing", BenchWorkload::flowing}},
+          CLI::ignore_case))
+      ->default_str("packed");
 
   RunCommand run;
-  add_generate_subcommand(app); // runs itself from its callback
-  add_shear_subcommand(app);    // likewise
-  add_slope_subcommand(app);    // likewise
-  add_render_subcommand(app);   // likewise
+  add_generate_subcommand(app);  // runs itself from its callback
+  add_shear_subcommand(app);     // likewise
+  add_slope_subcommand(app);     // likewise
+  add_render_subcommand(app);    // likewise
+  add_calibrate_subcommand(app); // likewise
 
   auto* cmd_run = app.add_subcommand(
       "run", "run a staged scenario: particles, walls, gravity, stages of cycling "

@@ -8,6 +8,7 @@
 #include "base/errors.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <fmt/format.h>
 
@@ -251,11 +252,20 @@ void World::cycle(long steps) {
   }
   // The automatic timestep is estimated on a fixed step interval and after
   // rebuilds only, so a run does not depend on how it is split into calls.
+  using Clock = std::chrono::steady_clock;
+  auto seconds = [](Clock::time_point a, Clock::time_point b) {
+    return std::chrono::duration<double>(b - a).count();
+  };
   for (long s = 0; s < steps; ++s) {
+    const auto t0 = Clock::now();
     const bool rebuilt = dirty_;
     ensure_built();
     update_timestep(rebuilt);
+    const auto t1 = Clock::now();
     compute_contacts();
+    const auto t2 = Clock::now();
+    phase_seconds_.neighbour_search += seconds(t0, t1);
+    phase_seconds_.contact_pass += seconds(t1, t2);
     if (unstable_entry_ != UINT32_MAX) {
       std::string who;
       if (unstable_entry_ >= UINT32_MAX / 2) {
@@ -275,6 +285,7 @@ void World::cycle(long steps) {
           step_, time_, who, settings_.max_overlap_fraction, dt_, critical_timestep()));
     }
     integrate();
+    phase_seconds_.integration += seconds(t2, Clock::now());
     time_ += dt_;
     ++step_;
   }

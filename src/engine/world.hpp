@@ -194,6 +194,15 @@ public:
   std::size_t bytes_per_particle() const; // all engine storage / particles
   std::size_t neighbour_entries() const { return bb_.entries(); }
   long neighbour_rebuilds() const { return rebuilds_; }
+  // Wall-clock seconds `cycle` has spent in each phase since construction:
+  // the neighbour search (rebuilds and re-sorts, with the timestep estimate
+  // after them), the contact pass, and the integration (forces gathered,
+  // damping, motion, walls). Read by `centridem bench`; timing costs two
+  // clock reads per phase and step, nothing per particle.
+  struct PhaseSeconds {
+    double neighbour_search = 0, contact_pass = 0, integration = 0;
+  };
+  const PhaseSeconds& phase_seconds() const { return phase_seconds_; }
   // OpenMP threads that ran the last step's integration (1 below 2,000
   // particles; see engine/thread_count.hpp).
   int threads_used() const { return threads_used_; }
@@ -275,6 +284,7 @@ private:
   double dt_ = 0;
   double dt_target_ = 0;
   long rebuilds_ = 0;
+  PhaseSeconds phase_seconds_;
   int threads_used_ = 1;
   bool dirty_ = true;
   double cutoff_extra_ = 0; // largest attraction range among property sets [m]

@@ -31,7 +31,9 @@ using tomlread::path_of;
 using tomlread::show;
 using tomlread::where;
 
-const Keys kTopKeys = {"description", "specimen", "contact", "preparation", "shear"};
+// [calibrate] belongs to `centridem calibrate` (docs/calibrate.md): a calibration scenario is a
+// shear scenario with that table, and `shear` runs it at its current values, ignoring the table.
+const Keys kTopKeys = {"description", "specimen", "contact", "preparation", "shear", "calibrate"};
 const Keys kContactSectionKeys = {"ball_ball"};
 const Keys kModelNames = {"linear", "rrlinear", "arrlinear"};
 const Keys kShearKeys = {"box",

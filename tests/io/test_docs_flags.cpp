@@ -22,8 +22,8 @@ using namespace centridem::testutil;
 
 namespace {
 
-const std::vector<std::string> kSubcommands = {"bench", "run",   "generate",
-                                               "shear", "slope", "render"};
+const std::vector<std::string> kSubcommands = {"bench", "run",    "generate", "shear",
+                                               "slope", "render", "calibrate"};
 
 // Flags of tools other than centridem that the docs show, by name.
 const std::set<std::string> kOtherTools = {
@@ -68,10 +68,14 @@ TEST(Docs, EveryDocumentedFlagExists) {
 
   const fs::path root = CENTRIDEM_SOURCE_DIR;
   // Each page and the subcommand it documents ("" = all of them).
-  const std::vector<std::pair<fs::path, std::string>> pages = {
-      {"README.md", ""},           {"docs/ARCHITECTURE.md", ""}, {"docs/scenario.md", "run"},
-      {"docs/shear.md", "shear"},  {"docs/slope.md", "slope"},   {"docs/specimens.md", "generate"},
-      {"bench/README.md", "bench"}};
+  const std::vector<std::pair<fs::path, std::string>> pages = {{"README.md", ""},
+                                                               {"docs/ARCHITECTURE.md", ""},
+                                                               {"docs/scenario.md", "run"},
+                                                               {"docs/shear.md", "shear"},
+                                                               {"docs/slope.md", "slope"},
+                                                               {"docs/specimens.md", "generate"},
+                                                               {"bench/README.md", "bench"},
+                                                               {"docs/calibrate.md", "calibrate"}};
   std::vector<std::string> unknown;
   std::size_t checked = 0;
   for (const auto& [page, page_sub] : pages) {

@@ -1,0 +1,377 @@
+// Calibration (`centridem calibrate`, docs/calibrate.md) without simulations:
+// the misfits against hand-computed values, the optimiser loop on analytic
+// functions with known minima (found, within its budget, stopped at the
+// tolerance), its resume from a recorded history without repeating an
+// evaluation, and every class of bad input named with its file, line or key.
+#include "base/errors.hpp"
+#include "procedures/calibration.hpp"
+#include "procedures/calibration_config.hpp"
+
+#include "cli_test_util.hpp"
+#include "scenario_fixtures.hpp"
+
+#include <cmath>
+#include <fstream>
+#include <gtest/gtest.h>
+#include <string>
+
+using namespace centridem;
+using centridem::testutil::TempDir;
+namespace fs = std::filesystem;
+
+namespace {
+
+// ---- misfits ------------------------------------------------------------------
+
+MeasuredCurve measured_three_points() {
+  MeasuredCurve m;
+  m.normal_stress_Pa = 50e3;
+  m.strain = {0.01, 0.02, 0.03, 0.05}; // the last beyond the simulated 0.04: left out
+  m.shear_stress_Pa = {10e3, 20e3, 30e3, 25e3};
+  return m;
+}
+
+SimulatedCurve simulated_three_points() {
+  SimulatedCurve s;
+  s.normal_stress_Pa = 50e3;
+  s.strain = {0.0, 0.02, 0.04};
+  s.shear_stress_Pa = {0.0, 24e3, 28e3};
+  s.vertical_displacement_m = {0.0, 2e-6, 4e-6};
+  return s;
+}
+
+TEST(CalibrationMisfit, CurveAgainstHandComputedValues) {
+  // Interpolated at 0.01, 0.02, 0.03: 12, 24, 26 kPa against 10, 20, 30:
+  // differences 2, 4, -4 kPa, RMS sqrt(36 / 3) = sqrt(12) kPa. Peaks 28 and 30:
+  // -2 kPa. With peak weight 1: sqrt(12 + 4) = 4 kPa.
+  const MeasuredCurve m = measured_three_points();
+  const SimulatedCurve s = simulated_three_points();
+  const CurveMisfit plain = curve_misfit(m, s, {});
+  EXPECT_EQ(plain.points, 3u);
+  EXPECT_NEAR(plain.rms_shear_stress_Pa, std::sqrt(12.0) * 1e3, 1e-9);
+  EXPECT_NEAR(plain.peak_difference_Pa, -2e3, 1e-9);
+  EXPECT_NEAR(plain.total_Pa, std::sqrt(12.0) * 1e3, 1e-9);
+  const CurveMisfit peak = curve_misfit(m, s, {1.0, 0.0});
+  EXPECT_NEAR(peak.total_Pa, 4e3, 1e-9);
+
+  // Dilation: simulated 1, 2, 3 µm at the three strains against 1, 1, 1 µm
+  // measured: RMS sqrt(5 / 3) µm; at 1000 kPa/mm that is 1.29099 kPa, and the
+  // total sqrt(12 + 4 + 5/3) kPa.
+  MeasuredCurve md = m;
+  md.vertical_displacement_m = {1e-6, 1e-6, 1e-6, 1e-6};
+  const CurveMisfit dil = curve_misfit(md, s, {1.0, 1000.0});
+  EXPECT_NEAR(dil.rms_vertical_displacement_m, std::sqrt(5.0 / 3.0) * 1e-6, 1e-15);
+  EXPECT_NEAR(dil.total_Pa, std::sqrt(12.0 + 4.0 + 5.0 / 3.0) * 1e3, 1e-6);
+
+  // Two pressures with totals 3 and 4 kPa: sqrt((9 + 16) / 2) kPa.
+  CurveMisfit a, b;
+  a.total_Pa = 3e3;
+  b.total_Pa = 4e3;
+  EXPECT_NEAR(overall_misfit({a, b}), std::sqrt(12.5) * 1e3, 1e-9);
+
+  // A simulation that never reached a measured strain compares nothing.
+  SimulatedCurve short_run = s;
+  short_run.strain = {0.0, 0.001, 0.002};
+  EXPECT_TRUE(std::isinf(curve_misfit(m, short_run, {}).total_Pa));
+}
+
+TEST(CalibrationMisfit, MohrCoulombAndPeakTargets) {
+  const MohrCoulombMisfit mc = mohr_coulomb_misfit({35.0, 5e3}, 35.6, 5.8e3);
+  EXPECT_NEAR(mc.friction_angle_difference_deg, 0.6, 1e-12);
+  EXPECT_NEAR(mc.cohesion_difference_Pa, 800.0, 1e-9);
+  EXPECT_NEAR(mc.total, 1.0, 1e-12); // sqrt(0.6^2 + 0.8^2)
+  EXPECT_NEAR(peak_stress_misfit({10e3, 20e3}, {13e3, 16e3}), std::sqrt(12.5) * 1e3, 1e-9);
+}
+
+TEST(CalibrationMisfit, UnitScalesRoundTripAndLogIsGeometric) {
+  const CalibrationParameter lin{"a", 0.02, 0.5, 0.08, false};
+  const CalibrationParameter log{"b", 1e8, 1e10, 1e9, true};
+  EXPECT_NEAR(to_unit(lin, 0.08), 0.125, 1e-12);
+  EXPECT_NEAR(to_unit(log, 1e9), 0.5, 1e-12); // the geometric middle
+  EXPECT_NEAR(from_unit(log, 0.5), 1e9, 1e-3);
+  EXPECT_NEAR(from_unit(lin, to_unit(lin, 0.3)), 0.3, 1e-12);
+}
+
+// ---- the optimiser loop -----------------------------------------------------
+
+// The issue's recovery problem with an analytic stand-in for the simulation:
+// E* in [1e8, 1e9] (log), rolling friction in [0.02, 0.5], true values 3e8 and
+// 0.16, started 50 % off (4.5e8 and 0.08). A smooth bowl whose minimum, 0, is
+// at the true values.
+std::vector<CalibrationParameter> recovery_parameters() {
+  return {{"contact.ball_ball.effective_modulus_Pa", 1e8, 1e9, 4.5e8, true},
+          {"contact.ball_ball.rolling_friction", 0.02, 0.5, 0.08, false}};
+}
+double bowl(const std::vector<double>& v) {
+  const double a = std::log(v[0] / 3e8) / 0.1, b = (v[1] - 0.16) / 0.01;
+  return a * a + b * b;
+}
+Evaluation evaluate_bowl(int, const std::vector<double>& v) {
+  Evaluation e;
+  e.misfit = bowl(v);
+  return e;
+}
+
+TEST(CalibrationOptimiser, FindsTheKnownMinimumFromFiftyPercentOff) {
+  OptimiserSettings s;
+  s.budget = 60;
+  s.unit_step_tolerance = 1e-6;
+  const OptimiserResult r = run_optimiser(recovery_parameters(), s, evaluate_bowl);
+  ASSERT_FALSE(r.history.empty());
+  EXPECT_DOUBLE_EQ(r.history.front().values[0], 4.5e8); // starts at the start
+  EXPECT_DOUBLE_EQ(r.history.front().values[1], 0.08);
+  EXPECT_LE(r.history.size(), 60u);
+  const Evaluation& best = r.history[r.best];
+  EXPECT_NEAR(best.values[0], 3e8, 0.01 * 3e8);
+  EXPECT_NEAR(best.values[1], 0.16, 0.01 * 0.16);
+  for (std::size_t k = 0; k < r.history.size(); ++k) {
+    EXPECT_EQ(r.history[k].index, static_cast<int>(k) + 1);
+    EXPECT_GE(r.history[k].values[0], 1e8); // inside the bounds
+    EXPECT_LE(r.history[k].values[0], 1e9);
+    EXPECT_GE(r.history[k].values[1], 0.02);
+    EXPECT_LE(r.history[k].values[1], 0.5);
+  }
+}
+
+TEST(CalibrationOptimiser, StopsAtTheToleranceOrTheBudget) {
+  OptimiserSettings s;
+  s.budget = 60;
+  s.tolerance = 0.05;
+  const OptimiserResult tol = run_optimiser(recovery_parameters(), s, evaluate_bowl);
+  EXPECT_LE(tol.history[tol.best].misfit, 0.05);
+  EXPECT_EQ(tol.best, tol.history.size() - 1); // stopped at the first point that met it
+  EXPECT_NE(tol.stop_reason.find("tolerance"), std::string::npos) << tol.stop_reason;
+
+  s.tolerance = 0;
+  s.budget = 7;
+  int calls = 0;
+  const OptimiserResult budget =
+      run_optimiser(recovery_parameters(), s, [&](int i, const std::vector<double>& v) {
+        ++calls;
+        return evaluate_bowl(i, v);
+      });
+  EXPECT_EQ(calls, 7);
+  EXPECT_EQ(budget.history.size(), 7u);
+  EXPECT_NE(budget.stop_reason.find("budget"), std::string::npos) << budget.stop_reason;
+}
+
+TEST(CalibrationOptimiser, OneParameterIsALineSearch) {
+  OptimiserSettings s;
+  s.budget = 40;
+  s.unit_step_tolerance = 1e-6;
+  const std::vector<CalibrationParameter> p = {{"contact.ball_ball.friction", 0.1, 0.9, 0.2}};
+  const OptimiserResult r = run_optimiser(p, s, [](int, const std::vector<double>& v) {
+    Evaluation e;
+    e.misfit = (v[0] - 0.6) * (v[0] - 0.6);
+    return e;
+  });
+  EXPECT_NEAR(r.history[r.best].values[0], 0.6, 0.006);
+}
+
+// A stopped calibration resumes without repeating an evaluation: stopped by an
+// exception in the 9th evaluation (as Ctrl-C stops a shear run), then run again
+// with the 8 recorded ones, it calls the evaluator only for the 9th onwards and
+// ends exactly where an uninterrupted run ends.
+TEST(CalibrationOptimiser, StoppedThenResumedRepeatsNoEvaluation) {
+  OptimiserSettings s;
+  s.budget = 25;
+  const OptimiserResult whole = run_optimiser(recovery_parameters(), s, evaluate_bowl);
+
+  std::vector<Evaluation> recorded;
+  EXPECT_THROW(run_optimiser(
+                   recovery_parameters(), s,
+                   [](int index, const std::vector<double>& v) {
+                     if (index == 9) throw Interrupted(2, "stopped in evaluation 9");
+                     return evaluate_bowl(index, v);
+                   },
+                   {}, [&](const Evaluation& e, bool) { recorded.push_back(e); }),
+               Interrupted);
+  ASSERT_EQ(recorded.size(), 8u);
+
+  std::vector<int> evaluated;
+  int replayed = 0;
+  const OptimiserResult resumed = run_optimiser(
+      recovery_parameters(), s,
+      [&](int index, const std::vector<double>& v) {
+        evaluated.push_back(index);
+        return evaluate_bowl(index, v);
+      },
+      recorded, [&](const Evaluation&, bool r) { replayed += r ? 1 : 0; });
+  EXPECT_EQ(replayed, 8);
+  ASSERT_FALSE(evaluated.empty());
+  EXPECT_EQ(evaluated.front(), 9);
+  EXPECT_EQ(evaluated.size() + 8, resumed.history.size());
+  ASSERT_EQ(resumed.history.size(), whole.history.size());
+  for (std::size_t k = 0; k < whole.history.size(); ++k) {
+    EXPECT_EQ(resumed.history[k].values, whole.history[k].values) << "evaluation " << k + 1;
+    EXPECT_EQ(resumed.history[k].misfit, whole.history[k].misfit) << "evaluation " << k + 1;
+  }
+}
+
+TEST(CalibrationOptimiser, AHistoryOfAnotherCalibrationIsRefused) {
+  OptimiserSettings s;
+  s.budget = 6;
+  OptimiserResult r = run_optimiser(recovery_parameters(), s, evaluate_bowl);
+  r.history[2].values[1] *= 1.01;
+  try {
+    run_optimiser(recovery_parameters(), s, evaluate_bowl, r.history);
+    FAIL() << "a changed history was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("evaluation 3"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("changed"), std::string::npos) << e.what();
+  }
+}
+
+// ---- the [calibrate] table and the measured curves ------------------------
+
+// The CI shear box at two pressures with a [calibrate] table of one stage;
+// `stage` replaces the stage's body.
+std::string scenario_with(const std::string& stage) {
+  std::string s = testutil::kSmallShearBox;
+  const std::string from = "normal_stresses_Pa = [100e3]";
+  s.replace(s.find(from), from.size(), "normal_stresses_Pa = [50e3, 150e3]");
+  return s + "\n[calibrate]\n[[calibrate.stage]]\nname = \"dry\"\n" + stage;
+}
+
+const std::string kGoodParameters =
+    "parameters = [{ key = \"contact.ball_ball.rolling_friction\", min = 0.02, max = 0.5, "
+    "start = 0.08 }]\n";
+
+class CalibrationConfig : public ::testing::Test {
+protected:
+  TempDir dir_{"centridem_calibration_config"};
+  void write(const std::string& name, const std::string& text) {
+    std::ofstream(dir_ / name) << text;
+  }
+  CalibrationScenario parse(const std::string& stage) {
+    return parse_calibration(scenario_with(stage), "cal.toml", dir_.path().string());
+  }
+  std::string error_of(const std::string& stage) {
+    try {
+      parse(stage);
+    } catch (const InputError& e) {
+      return e.what();
+    }
+    return "";
+  }
+  void SetUp() override {
+    write("both.csv", "normal_stress_kPa,shear_displacement_mm,shear_stress_kPa\n"
+                      "50,0.0,0\n50,0.03,20\n50,0.06,30\n"
+                      "150,0.0,0\n150,0.03,60\n150,0.06,90\n");
+  }
+};
+
+TEST_F(CalibrationConfig, ReadsCurvesAndConvertsDisplacementToStrain) {
+  const CalibrationScenario c = parse("target = { curves = [\"both.csv\"] }\n" + kGoodParameters);
+  ASSERT_EQ(c.stages.size(), 1u);
+  const CalibrationStage& st = c.stages[0];
+  ASSERT_EQ(st.curves.size(), 2u);
+  EXPECT_DOUBLE_EQ(st.curves[0].normal_stress_Pa, 50e3);
+  EXPECT_DOUBLE_EQ(st.curves[1].normal_stress_Pa, 150e3);
+  // 0.06 mm over the 3 mm height (strain = "height" by default).
+  EXPECT_NEAR(st.curves[1].strain.back(), 0.02, 1e-15);
+  EXPECT_DOUBLE_EQ(st.curves[1].shear_stress_Pa.back(), 90e3);
+  ASSERT_EQ(st.parameters.size(), 1u);
+  EXPECT_EQ(st.parameters[0].key, "contact.ball_ball.rolling_friction");
+  EXPECT_EQ(st.optimiser.budget, 30);
+
+  // The parameter reaches the stage's scenario.
+  const ShearScenario sc = stage_scenario(c, st, {}, {0.3});
+  EXPECT_DOUBLE_EQ(sc.ball_ball.rolling_friction, 0.3);
+}
+
+TEST_F(CalibrationConfig, BadMeasuredDataIsNamedWithFileAndLine) {
+  write("unsorted.csv", "normal_stress_kPa,shear_strain,shear_stress_kPa\n"
+                        "50,0.0,0\n50,0.02,20\n50,0.01,30\n150,0,0\n");
+  std::string e = error_of("target = { curves = [\"unsorted.csv\"] }\n" + kGoodParameters);
+  EXPECT_NE(e.find("unsorted.csv line 4"), std::string::npos) << e;
+  EXPECT_NE(e.find("rising"), std::string::npos) << e;
+
+  write("only50.csv", "shear_strain,shear_stress_kPa\n0,0\n0.01,20\n");
+  e = error_of("target = { curves = [{ file = \"only50.csv\", normal_stress_kPa = 50 }] }\n" +
+               kGoodParameters);
+  EXPECT_NE(e.find("none at 150 kPa"), std::string::npos) << e;
+  EXPECT_NE(e.find("calibrate.stage[1].target"), std::string::npos) << e;
+
+  write("nan.csv", "normal_stress_kPa,shear_strain,shear_stress_kPa\n50,0,0\n50,0.01,abc\n");
+  e = error_of("target = { curves = [\"nan.csv\"] }\n" + kGoodParameters);
+  EXPECT_NE(e.find("nan.csv line 3 column 3"), std::string::npos) << e;
+
+  write("column.csv", "normal_stress_kPa,strain,shear_stress_kPa\n50,0,0\n");
+  e = error_of("target = { curves = [\"column.csv\"] }\n" + kGoodParameters);
+  EXPECT_NE(e.find("column.csv line 1 (header)"), std::string::npos) << e;
+  EXPECT_NE(e.find("\"strain\""), std::string::npos) << e;
+
+  write("at75.csv", "normal_stress_kPa,shear_strain,shear_stress_kPa\n75,0,0\n75,0.01,5\n");
+  e = error_of("target = { curves = [\"both.csv\", \"at75.csv\"] }\n" + kGoodParameters);
+  EXPECT_NE(e.find("a curve at 75 kPa"), std::string::npos) << e;
+
+  e = error_of("target = { curves = [\"missing.csv\"] }\n" + kGoodParameters);
+  EXPECT_NE(e.find("missing.csv"), std::string::npos) << e;
+}
+
+TEST_F(CalibrationConfig, BadParametersAreNamedByKey) {
+  const std::string target = "target = { curves = [\"both.csv\"] }\n";
+  std::string e = error_of(target + "parameters = [{ key = \"contact.ball_ball.friction\", "
+                                    "min = 0.1, start = 0.3 }]\n");
+  EXPECT_NE(e.find("calibrate.stage[1].parameters[1].max"), std::string::npos) << e;
+
+  e = error_of(target + "parameters = [{ key = \"contact.ball_ball.friction\", min = 0.1, "
+                        "max = 0.5, start = 0.7 }]\n");
+  EXPECT_NE(e.find("calibrate.stage[1].parameters[1].start"), std::string::npos) << e;
+  EXPECT_NE(e.find("inside the bounds [0.1, 0.5]"), std::string::npos) << e;
+
+  e = error_of(target + "parameters = [{ key = \"contact.ball_ball.frcition\", min = 0.1, "
+                        "max = 0.5, start = 0.3 }]\n");
+  EXPECT_NE(e.find("calibrate.stage[1].parameters[1].key"), std::string::npos) << e;
+  EXPECT_NE(e.find("friction"), std::string::npos) << e; // the did-you-mean
+
+  e = error_of(target + "parameters = [{ key = \"contact.ball_ball.friction\", min = 0, "
+                        "max = 0.5, start = 0.3, scale = \"log\" }]\n");
+  EXPECT_NE(e.find("parameters[1].scale"), std::string::npos) << e;
+
+  e = error_of(target + "parameters = []\n");
+  EXPECT_NE(e.find("calibrate.stage[1].parameters"), std::string::npos) << e;
+
+  e = error_of(target + kGoodParameters + "budget = 0\n");
+  EXPECT_NE(e.find("calibrate.stage[1].budget"), std::string::npos) << e;
+
+  e = error_of("target = { friction_angle_deg = 95, cohesion_kPa = 2 }\n" + kGoodParameters);
+  EXPECT_NE(e.find("friction_angle_deg"), std::string::npos) << e;
+
+  e = error_of("target = { peak_shear_stress_kPa = [30] }\n" + kGoodParameters);
+  EXPECT_NE(e.find("one per normal stress"), std::string::npos) << e;
+}
+
+// The command line refuses a bad calibration with exit code 2 and the key.
+TEST_F(CalibrationConfig, CommandExitsWithTwoOnBadInput) {
+  write("cal.toml", scenario_with("target = { curves = [\"both.csv\"] }\n"
+                                  "parameters = [{ key = \"contact.ball_ball.friction\", "
+                                  "min = 0.1, max = 0.5, start = 0.7 }]\n"));
+  const testutil::CliRun r = testutil::run_centridem(
+      {"calibrate", (dir_ / "cal.toml").string(), "--out", (dir_ / "out").string()},
+      dir_ / "log.txt", 60);
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_NE(r.output.find("calibrate.stage[1].parameters[1].start"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(dir_ / "out"));
+}
+
+// --set reaches a calibration as it reaches the other subcommands (issue 19):
+// a key changed on the command line is checked with the measured data.
+TEST_F(CalibrationConfig, CommandTakesSetAndCheck) {
+  write("cal.toml", scenario_with("target = { curves = [\"both.csv\"] }\n" + kGoodParameters));
+  const std::string cal = (dir_ / "cal.toml").string();
+  testutil::CliRun r = testutil::run_centridem(
+      {"calibrate", cal, "--check", "--set", "contact.ball_ball.friction=0.3"}, dir_ / "ok.txt",
+      60);
+  EXPECT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("stage dry: 1 parameter(s)"), std::string::npos) << r.output;
+  // Pressures changed by --set no longer match the measured file's.
+  r = testutil::run_centridem(
+      {"calibrate", cal, "--check", "--set", "shear.normal_stresses_Pa=[50e3, 100e3]"},
+      dir_ / "bad.txt", 60);
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_NE(r.output.find("a curve at 150 kPa"), std::string::npos) << r.output;
+}
+
+} // namespace
