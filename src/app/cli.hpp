@@ -3,6 +3,7 @@
 // subcommand's callback, and the process set-up before OpenMP starts.
 #pragma once
 
+#include <chrono>
 #include <functional>
 #include <string>
 #include <vector>
@@ -63,6 +64,11 @@ void use_passive_openmp_wait(char** argv);
 // Prints each "centridem: warning: ..." line to stderr (a scenario's
 // plausibility warnings: the run goes on).
 void print_warnings(const std::vector<std::string>& warnings);
+
+// Wall-clock seconds since t0, and a duration for progress lines and
+// summaries: "45 s", "12.5 min", "3.2 h" ("?" when unknown or negative).
+double seconds_since(std::chrono::steady_clock::time_point t0);
+std::string format_duration(double seconds);
 
 // "centridem 0.1.0 (Release, GCC 12.2.0)".
 std::string version_string();

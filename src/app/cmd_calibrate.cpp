@@ -30,32 +30,19 @@ namespace centridem {
 
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
+using cli::format_duration;
+using cli::seconds_since;
 
 namespace {
-
-double seconds_since(Clock::time_point t0) {
-  return std::chrono::duration<double>(Clock::now() - t0).count();
-}
 
 std::string kpa(double Pa) {
   return fmt::format("{:g}", Pa / 1e3);
 }
 
-std::string format_duration(double s) {
-  if (!std::isfinite(s) || s < 0) return "?";
-  if (s < 120) return fmt::format("{:.0f} s", s);
-  if (s < 7200) return fmt::format("{:.1f} min", s / 60);
-  return fmt::format("{:.1f} h", s / 3600);
-}
-
+// Every file the calibration writes is replaced whole (a temporary file
+// renamed over it), so a stopped run never leaves half a file.
 void write_text(const fs::path& path, const std::string& text) {
-  const fs::path tmp = path.string() + ".tmp";
-  {
-    std::ofstream out(tmp, std::ios::binary);
-    out << text;
-    if (!out) throw std::runtime_error("cannot write " + tmp.string());
-  }
-  fs::rename(tmp, path);
+  replace_text_file(path.string(), text);
 }
 
 std::string read_text(const fs::path& path, const std::string& flag) {

@@ -31,12 +31,10 @@ namespace centridem {
 
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
+using cli::format_duration;
+using cli::seconds_since;
 
 namespace {
-
-double seconds_since(Clock::time_point t0) {
-  return std::chrono::duration<double>(Clock::now() - t0).count();
-}
 
 std::string kpa_label(double sigma_Pa) {
   return fmt::format("{:g}", sigma_Pa / 1000.0);
@@ -49,17 +47,8 @@ double angle_deg(double tau, double sigma) {
   return std::atan2(tau, sigma) * 180.0 / std::numbers::pi;
 }
 
-std::string format_duration(double s) {
-  if (!std::isfinite(s) || s < 0) return "?";
-  if (s < 120) return fmt::format("{:.0f} s", s);
-  if (s < 7200) return fmt::format("{:.1f} min", s / 60);
-  return fmt::format("{:.1f} h", s / 3600);
-}
-
 void write_text(const fs::path& path, const std::string& text) {
-  std::ofstream out(path, std::ios::binary);
-  out << text;
-  if (!out) throw std::runtime_error("cannot write " + path.string());
+  write_text_file(path.string(), text);
 }
 
 fs::path checkpoint_path(const fs::path& out, double sigma_Pa) {
