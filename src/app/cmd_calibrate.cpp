@@ -317,14 +317,6 @@ void plot_curves(const CalibrationStage& st, const fs::path& run, const Evaluati
   mc.render(png.string(), 900, 600);
 }
 
-// ---- the command -------------------------------------------------------------
-
-struct StageOutcome {
-  OptimiserResult result;
-  std::vector<std::string> fitted; // KEY = VALUE
-  double wall_seconds = 0;
-};
-
 } // namespace
 
 int run_calibrate_command(const CalibrateCommandOptions& o) {

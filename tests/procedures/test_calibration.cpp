@@ -343,6 +343,34 @@ TEST_F(CalibrationConfig, BadParametersAreNamedByKey) {
   EXPECT_NE(e.find("one per normal stress"), std::string::npos) << e;
 }
 
+// Two stages as the paper's: the second has its own pressures (its `set`) and
+// builds on the first's fitted values, passed as overrides.
+TEST_F(CalibrationConfig, SecondStageHasItsOwnSetAndBuildsOnTheFirst) {
+  write("humid.csv", "normal_stress_kPa,shear_strain,shear_stress_kPa\n"
+                     "20,0.0,0\n20,0.01,15\n60,0.0,0\n60,0.01,45\n");
+  const CalibrationScenario c =
+      parse("target = { curves = [\"both.csv\"] }\n" + kGoodParameters +
+            "[[calibrate.stage]]\nname = \"humid\"\n"
+            "set = [\"contact.ball_ball.model = 'arrlinear'\", "
+            "\"shear.normal_stresses_Pa = [20e3, 60e3]\"]\n"
+            "target = { curves = [\"humid.csv\"] }\n"
+            "parameters = [{ key = \"contact.ball_ball.attraction_force_N\", min = 0.0, "
+            "max = 5e-4, start = 1e-4 }]\n");
+  ASSERT_EQ(c.stages.size(), 2u);
+  const CalibrationStage& humid = c.stages[1];
+  EXPECT_EQ(humid.name, "humid");
+  EXPECT_EQ(humid.normal_stresses_Pa, (std::vector<double>{20e3, 60e3}));
+  ASSERT_EQ(humid.curves.size(), 2u);
+  const ShearScenario sc =
+      stage_scenario(c, humid, {parameter_override(c.stages[0].parameters[0], 0.21)}, {3e-4});
+  EXPECT_DOUBLE_EQ(sc.ball_ball.rolling_friction, 0.21); // the first stage's fit
+  EXPECT_DOUBLE_EQ(sc.ball_ball.attraction_force_N, 3e-4);
+  EXPECT_EQ(sc.ball_ball.model, ContactModel::arrlinear);
+  // The first stage is untouched by the second's set.
+  EXPECT_EQ(stage_scenario(c, c.stages[0], {}, {0.2}).normal_stresses_Pa,
+            (std::vector<double>{50e3, 150e3}));
+}
+
 // The command line refuses a bad calibration with exit code 2 and the key.
 TEST_F(CalibrationConfig, CommandExitsWithTwoOnBadInput) {
   write("cal.toml", scenario_with("target = { curves = [\"both.csv\"] }\n"
