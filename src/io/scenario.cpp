@@ -863,15 +863,7 @@ ContactPatch read_contact_patch(const toml::node& node, const std::string& path)
 
 Scenario parse_scenario(std::string_view text, const std::string& source_name,
                         const std::string& base_dir) {
-  toml::table root;
-  try {
-    root = toml::parse(text, source_name.empty() ? std::string_view("<scenario>")
-                                                 : std::string_view(source_name));
-  } catch (const toml::parse_error& e) {
-    const toml::source_region& s = e.source();
-    throw InputError(fmt::format("{}:{}:{}: TOML syntax error: {}", s.path ? *s.path : source_name,
-                                 s.begin.line, s.begin.column, e.description()));
-  }
+  const toml::table root = tomlread::parse_document(text, source_name);
   Scenario sc = parse_table(root, source_name, base_dir);
   // [specimen] is for `centridem generate` (io/specimen_config.hpp); checked
   // here too, so that a mistake in it never passes silently.

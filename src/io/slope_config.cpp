@@ -195,15 +195,7 @@ ContactProperties SlopeScenario::soil_at_cut() const {
 
 SlopeScenario parse_slope_scenario(std::string_view text, const std::string& source_name,
                                    const std::string& base_dir) {
-  toml::table root;
-  try {
-    root = toml::parse(text, source_name.empty() ? std::string_view("<scenario>")
-                                                 : std::string_view(source_name));
-  } catch (const toml::parse_error& e) {
-    const toml::source_region& s = e.source();
-    throw InputError(fmt::format("{}:{}:{}: TOML syntax error: {}", s.path ? *s.path : source_name,
-                                 s.begin.line, s.begin.column, e.description()));
-  }
+  const toml::table root = tomlread::parse_document(text, source_name);
   check_keys(root, "", kTopKeys);
   SlopeScenario sc;
   sc.source_path = source_name;

@@ -260,15 +260,7 @@ RelaxSpec read_relax(const toml::node& node, const toml::table& root) {
 
 SpecimenSpec parse_specimen(std::string_view text, const std::string& source_name,
                             const std::string& base_dir, const std::optional<Box>& default_region) {
-  toml::table root;
-  try {
-    root = toml::parse(text, source_name.empty() ? std::string_view("<scenario>")
-                                                 : std::string_view(source_name));
-  } catch (const toml::parse_error& e) {
-    const toml::source_region& s = e.source();
-    throw InputError(fmt::format("{}:{}:{}: TOML syntax error: {}", s.path ? *s.path : source_name,
-                                 s.begin.line, s.begin.column, e.description()));
-  }
+  const toml::table root = tomlread::parse_document(text, source_name);
   SpecimenSpec s;
   s.scenario_path = source_name;
   s.base_dir = base_dir;

@@ -205,17 +205,21 @@ void merge_into(toml::table& into, const toml::table& from) {
 }
 } // namespace
 
+toml::table parse_document(std::string_view text, const std::string& source_name) {
+  try {
+    return toml::parse(text, source_name.empty() ? std::string_view("<scenario>")
+                                                 : std::string_view(source_name));
+  } catch (const toml::parse_error& e) {
+    const toml::source_region& s = e.source();
+    throw InputError(fmt::format("{}:{}:{}: TOML syntax error: {}", s.path ? *s.path : source_name,
+                                 s.begin.line, s.begin.column, e.description()));
+  }
+}
+
 std::string apply_overrides(std::string_view toml_text, const std::string& source_name,
                             const std::vector<std::string>& overrides) {
   if (overrides.empty()) return std::string(toml_text);
-  toml::table root;
-  try {
-    root = toml::parse(toml_text, std::string_view(source_name));
-  } catch (const toml::parse_error& e) {
-    const toml::source_region& r = e.source();
-    throw InputError(fmt::format("{}:{}:{}: TOML syntax error: {}", source_name, r.begin.line,
-                                 r.begin.column, e.description()));
-  }
+  toml::table root = parse_document(toml_text, source_name);
   for (const std::string& o : overrides) {
     toml::table t;
     try {

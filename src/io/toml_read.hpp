@@ -41,6 +41,10 @@ long as_integer(const toml::node& n, const std::string& key, const std::string& 
 const toml::table& as_table(const toml::node& n, const std::string& key, const std::string& what);
 std::string path_of(const std::string& table, std::string_view key); // "table.key" or "key"
 
+// A TOML document parsed, or an InputError "FILE:LINE:COLUMN: TOML syntax
+// error: ..." (`source_name` names it; "" is "<scenario>").
+toml::table parse_document(std::string_view text, const std::string& source_name);
+
 // Command-line overrides (`--set KEY=VALUE`, TOML syntax, dotted keys:
 // `trial.after_cut = { rolling_friction = 0 }`) merged into a scenario's text:
 // tables merge key by key, any other value (an inline table too) replaces the

@@ -350,14 +350,7 @@ CalibrationScenario parse_calibration(std::string_view text, const std::string& 
   c.source = source;
   c.base_dir = base_dir;
   c.text = std::string(text);
-  toml::table root;
-  try {
-    root = toml::parse(text, std::string_view(source));
-  } catch (const toml::parse_error& e) {
-    const toml::source_region& r = e.source();
-    throw InputError(fmt::format("{}:{}:{}: TOML syntax error: {}", source, r.begin.line,
-                                 r.begin.column, e.description()));
-  }
+  const toml::table root = tomlread::parse_document(text, source);
   const toml::node* cal = root.get("calibrate");
   if (!cal)
     missing("calibrate",
