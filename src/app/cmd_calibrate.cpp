@@ -61,6 +61,9 @@ std::vector<std::string> part_names(const CalibrationStage& st) {
   switch (st.kind) {
   case CalibrationTargetKind::curves:
     for (double s : st.normal_stresses_Pa) n.push_back("misfit_at_" + kpa(s) + "kPa_kPa");
+    if (st.weights.height_kPa_per_um > 0)
+      for (double s : st.normal_stresses_Pa)
+        n.push_back("height_difference_at_" + kpa(s) + "kPa_um");
     break;
   case CalibrationTargetKind::peak_stresses:
     for (double s : st.normal_stresses_Pa) n.push_back("peak_difference_at_" + kpa(s) + "kPa_kPa");
@@ -141,6 +144,7 @@ SimulatedCurve simulated_curve(const fs::path& run, double sigma) {
   const nlohmann::json j = nlohmann::json::parse(in);
   SimulatedCurve c;
   c.normal_stress_Pa = sigma;
+  c.consolidated_height_m = j.at("consolidated_height_m").get<double>();
   for (const auto& q : j.at("curve_strain_tau_dz")) {
     const double e = q[0].get<double>();
     if (!c.strain.empty() && !(e > c.strain.back())) continue; // keep the strains rising
@@ -161,6 +165,8 @@ void compare(const CalibrationStage& st, const fs::path& run, Evaluation& e) {
       per.push_back(curve_misfit(m, simulated_curve(run, m.normal_stress_Pa), st.weights));
       e.parts.push_back(per.back().total_Pa / 1e3);
     }
+    if (st.weights.height_kPa_per_um > 0)
+      for (const CurveMisfit& m : per) e.parts.push_back(m.height_difference_m * 1e6);
     e.misfit = overall_misfit(per) / 1e3;
     break;
   }

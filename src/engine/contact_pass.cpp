@@ -18,6 +18,15 @@ void World::compute_contacts() {
     compute_contacts_impl<false>();
 }
 
+// The property set of a ball-ball contact born at mean centre height z when
+// the defaults are graded by height (set_ball_ball_defaults_by_height). Out
+// of line: called once per contact born, kept out of the contact loop's code.
+[[gnu::noinline]] std::uint16_t World::graded_default(double z_m) const {
+  const double b = std::floor((z_m - band_z0_) / band_height_);
+  const int last = static_cast<int>(band_props_.size()) - 1;
+  return band_props_[!(b > 0) ? 0 : b >= last ? last : static_cast<int>(b)];
+}
+
 template <bool Periodic> void World::compute_contacts_impl() {
   const std::size_t n = p_.size();
   const double dt = dt_;
@@ -30,7 +39,15 @@ template <bool Periodic> void World::compute_contacts_impl() {
   const ContactProperties* props = props_.data();
   const std::uint16_t bb_default = ball_ball_default_;
   const ContactProperties& bb_def = props_[bb_default];
-  const double bb_default_range = bb_def.attraction_force_N > 0 ? bb_def.attraction_range_m : 0.0;
+  // Reach of a contact not yet made: the attraction range of the defaults
+  // (and of the graded defaults, below).
+  const double bb_default_range = [&] {
+    double reach = bb_def.attraction_force_N > 0 ? bb_def.attraction_range_m : 0.0;
+    for (std::uint16_t k : band_props_)
+      if (props_[k].attraction_force_N > 0) reach = std::max(reach, props_[k].attraction_range_m);
+    return reach;
+  }();
+  const bool graded = !band_props_.empty(); // defaults graded by height
   const double max_overlap = settings_.max_overlap_fraction;
   std::uint32_t unstable = UINT32_MAX;
 
@@ -57,7 +74,8 @@ template <bool Periodic> void World::compute_contacts_impl() {
       if (pr == kNoContact) {
         const double reach = r[i] + r[j] + bb_default_range;
         if (dist2 >= reach * reach) continue; // not touching: nothing to do
-        pr = bb_default;                      // contact is born: copy the defaults
+        // Contact is born: copy the defaults (of the band of its height).
+        pr = graded ? graded_default(x[i].z + 0.5 * d.z) : bb_default;
         bb_.state[e] = ContactState{};
       }
       const double dist = std::sqrt(dist2);

@@ -82,6 +82,7 @@ double World::critical_timestep() {
     beta = std::max({beta, props_[k].dashpot_normal_ratio, props_[k].dashpot_shear_ratio});
   };
   consider(ball_ball_default_);
+  for (std::uint16_t k : band_props_) consider(k);
   for (const Wall& wl : walls_) consider(wl.properties);
   for (std::uint16_t k : bb_.properties)
     if (k != kNoContact) consider(k);

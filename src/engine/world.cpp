@@ -207,6 +207,35 @@ std::uint16_t World::register_properties(const ContactProperties& p) {
 void World::set_ball_ball_defaults(const ContactProperties& p) {
   validate(p, "contact.ball_ball");
   ball_ball_default_ = register_properties(p);
+  band_props_.clear();
+}
+
+void World::set_ball_ball_defaults_by_height(const HeightGradedDefaults& g) {
+  if (g.per_band.empty()) {
+    band_props_.clear();
+    return;
+  }
+  if (!(g.band_height_m > 0) || !std::isfinite(g.band_height_m) || !std::isfinite(g.z0_m))
+    throw InputError("band_height_m", fmt::format("{:g}", g.band_height_m),
+                     "the bands of the graded defaults need a finite height > 0 [m]");
+  std::vector<std::uint16_t> bands;
+  bands.reserve(g.per_band.size());
+  for (const ContactProperties& p : g.per_band) {
+    validate(p, "contact.ball_ball (graded by height)");
+    bands.push_back(register_properties(p));
+  }
+  band_z0_ = g.z0_m;
+  band_height_ = g.band_height_m;
+  band_props_ = std::move(bands);
+}
+
+World::HeightGradedDefaults World::ball_ball_defaults_by_height() const {
+  HeightGradedDefaults g;
+  if (band_props_.empty()) return g;
+  g.z0_m = band_z0_;
+  g.band_height_m = band_height_;
+  for (std::uint16_t k : band_props_) g.per_band.push_back(props_[k]);
+  return g;
 }
 
 void World::set_wall_defaults(std::size_t wall, const ContactProperties& p) {
@@ -252,18 +281,18 @@ void World::cycle(long steps) {
   }
   // The automatic timestep is estimated on a fixed step interval and after
   // rebuilds only, so a run does not depend on how it is split into calls.
-  using Clock = std::chrono::steady_clock;
-  auto seconds = [](Clock::time_point a, Clock::time_point b) {
+  using SteadyClock = std::chrono::steady_clock;
+  auto seconds = [](SteadyClock::time_point a, SteadyClock::time_point b) {
     return std::chrono::duration<double>(b - a).count();
   };
   for (long s = 0; s < steps; ++s) {
-    const auto t0 = Clock::now();
+    const auto t0 = SteadyClock::now();
     const bool rebuilt = dirty_;
     ensure_built();
     update_timestep(rebuilt);
-    const auto t1 = Clock::now();
+    const auto t1 = SteadyClock::now();
     compute_contacts();
-    const auto t2 = Clock::now();
+    const auto t2 = SteadyClock::now();
     phase_seconds_.neighbour_search += seconds(t0, t1);
     phase_seconds_.contact_pass += seconds(t1, t2);
     if (unstable_entry_ != UINT32_MAX) {
@@ -285,7 +314,7 @@ void World::cycle(long steps) {
           step_, time_, who, settings_.max_overlap_fraction, dt_, critical_timestep()));
     }
     integrate();
-    phase_seconds_.integration += seconds(t2, Clock::now());
+    phase_seconds_.integration += seconds(t2, SteadyClock::now());
     time_ += dt_;
     ++step_;
   }

@@ -152,8 +152,22 @@ public:
   // --- body field and contact defaults (PFC contact model assignment table) --
   void set_body_field(const BodyField& f) { field_ = f; }
   const BodyField& body_field() const { return field_; }
-  // New ball-ball contacts copy these; existing contacts keep theirs.
+  // New ball-ball contacts copy these; existing contacts keep theirs. Clears
+  // any grading by height (below).
   void set_ball_ball_defaults(const ContactProperties& p);
+  // Ball-ball defaults graded by height (the moisture of a centrifuge model,
+  // procedures/moisture.hpp): a contact born with the mean height z of its two
+  // centres in band b = clamp(floor((z - z0) / dz), 0, n - 1) copies
+  // per_band[b] instead of the defaults; the bands below 0 and above n - 1
+  // extend to infinity. Costs one division per contact born, nothing per
+  // contact and step. An empty per_band removes the grading.
+  struct HeightGradedDefaults {
+    double z0_m = 0;                         // bottom of band 0 [m]
+    double band_height_m = 0;                // dz [m] (> 0)
+    std::vector<ContactProperties> per_band; // the defaults of each band, from the bottom
+  };
+  void set_ball_ball_defaults_by_height(const HeightGradedDefaults& g);
+  HeightGradedDefaults ball_ball_defaults_by_height() const;
   const ContactProperties& ball_ball_defaults() const { return props_[ball_ball_default_]; }
   void set_wall_defaults(std::size_t wall, const ContactProperties& p);
   const ContactProperties& wall_defaults(std::size_t wall) const {
@@ -261,7 +275,8 @@ private:
     if (!bb_.image.empty()) d += image_shift_[bb_.image[e]];
     return d;
   }
-  std::size_t first_end(std::uint32_t e) const; // row that holds entry e
+  std::size_t first_end(std::uint32_t e) const;   // row that holds entry e
+  std::uint16_t graded_default(double z_m) const; // defaults of the band of height z
   void integrate();
   void update_timestep(bool force_estimate);
   std::uint16_t register_properties(const ContactProperties& p);
@@ -276,6 +291,8 @@ private:
   BodyField field_;
   std::vector<ContactProperties> props_;
   std::uint16_t ball_ball_default_ = 0;
+  double band_z0_ = 0, band_height_ = 0;  // grading of the defaults by height [m]
+  std::vector<std::uint16_t> band_props_; // property set of each band; empty: not graded
   BallBallContacts bb_;
   BallWallContacts bw_;
   std::int64_t next_id_ = 1;

@@ -98,6 +98,8 @@ void write_checkpoint(const World& world, const std::string& path,
   w.pod(world.body_field());
   w.pod(world.periodic());
   w.props(world.ball_ball_defaults());
+  const World::HeightGradedDefaults bands = world.ball_ball_defaults_by_height();
+  w.pod(bands.z0_m), w.pod(bands.band_height_m), w.vec(bands.per_band);
   const auto& P = world.particles();
   w.vec(P.position), w.vec(P.velocity), w.vec(P.spin), w.vec(P.applied_force);
   w.vec(P.applied_moment), w.vec(P.displacement), w.vec(P.radius), w.vec(P.mass);
@@ -159,9 +161,9 @@ LoadedCheckpoint read_checkpoint(World& world, const std::string& path) {
   std::memcpy(&version, file.data() + 8, 4);
   std::memcpy(&length, file.data() + 12, 8);
   std::memcpy(&sum, file.data() + 20, 8);
-  if (version != kCheckpointVersion)
+  if (version != kCheckpointVersion && version != 4)
     throw InputError("checkpoint", "\"" + path + "\"",
-                     fmt::format("format version {} is not supported (this build reads {})",
+                     fmt::format("format version {} is not supported (this build reads 4 to {})",
                                  version, kCheckpointVersion));
   if (file.size() - head != length)
     throw InputError("checkpoint", "\"" + path + "\"",
@@ -179,10 +181,17 @@ LoadedCheckpoint read_checkpoint(World& world, const std::string& path) {
   const auto field = r.pod<BodyField>();
   const auto periodic = r.pod<PeriodicBox>();
   const auto bb_defaults = r.pod<ContactProperties>();
+  World::HeightGradedDefaults bands;
+  if (version >= 5) {
+    bands.z0_m = r.pod<double>();
+    bands.band_height_m = r.pod<double>();
+    bands.per_band = r.vec<ContactProperties>();
+  }
   world = World(settings);
   world.set_body_field(field);
   if (periodic.any()) world.set_periodic(periodic);
   world.set_ball_ball_defaults(bb_defaults);
+  world.set_ball_ball_defaults_by_height(bands);
 
   ParticleStore P;
   P.position = r.vec<Vec3>(), P.velocity = r.vec<Vec3>(), P.spin = r.vec<Vec3>();

@@ -19,7 +19,9 @@ namespace centridem {
 
 class World;
 
-inline constexpr unsigned kCheckpointVersion = 4; // 3: the neighbour-list state; 4: servo integral
+// 3: the neighbour-list state; 4: servo integral; 5: ball-ball defaults graded by height (a
+// version-4 file is still read: it has no grading)
+inline constexpr unsigned kCheckpointVersion = 5;
 
 // FNV-1a, 64 bit: the checkpoint checksum (detects flipped bytes; with the
 // stored length, truncation); also a cache key for recipes.

@@ -31,8 +31,11 @@ const Keys kSlopeKeys = {
     "breadth_m", "crest_to_wall_m",       "length_m",       "attraction_divided_by_s", "walls"};
 const Keys kBenchKeys = {"height_m", "width_m", "face_angle_deg"};
 const Keys kWallKeys = {"chamber", "end_wall", "end"};
-const Keys kFieldKeys = {"kind", "base_radius_m", "reference_radius_m", "axis", "coriolis"};
-const Keys kMoistureKeys = {"top_factor", "bottom_factor", "bands"};
+const Keys kFieldKeys = {"kind", "base_radius_m", "reference", "reference_radius_m",
+                         "axis", "coriolis"};
+const Keys kMoistureKeys = {"profile", "adhesion",    "reference_water_content_percent",
+                            "table",   "top_factor",  "bottom_factor",
+                            "bands",   "new_contacts"};
 const Keys kTrialKeys = {"local_damping",
                          "equilibrium_ratio",
                          "foundation_max_steps",
@@ -78,6 +81,86 @@ const toml::table* opt_table(const toml::table& root, const std::string& key,
 bool opt_bool(const toml::table& t, const std::string& path, std::string_view k, bool def) {
   const toml::node* n = t.get(k);
   return n ? as_bool(*n, path_of(path, k)) : def;
+}
+
+// A list of [x, y] points with x strictly increasing, x within [x_min,
+// x_max], y >= 0 (and <= y_max) (`what` names x and y for the messages).
+std::vector<std::array<double, 2>> point_list(const toml::node& n, const std::string& key,
+                                              double x_min, double x_max, double y_max,
+                                              const std::string& what) {
+  const toml::array* a = n.as_array();
+  if (!a || a->empty()) fail(key, n, "expected a non-empty list of points [" + what + "]");
+  std::vector<std::array<double, 2>> out;
+  for (std::size_t i = 0; i < a->size(); ++i) {
+    const std::string ki = fmt::format("{}[{}]", key, i);
+    const toml::array* p = (*a)[i].as_array();
+    if (!p || p->size() != 2) fail(ki, (*a)[i], "a point [" + what + "]");
+    const double x = as_number((*p)[0], ki + "[0]", "a number");
+    const double y = as_number((*p)[1], ki + "[1]", "a number");
+    if (!(x >= x_min && x <= x_max))
+      fail(ki + "[0]", (*p)[0], fmt::format("in [{:g}, {:g}]", x_min, x_max));
+    if (!(y >= 0 && y <= y_max)) fail(ki + "[1]", (*p)[1], fmt::format("in [0, {:g}]", y_max));
+    if (!out.empty() && !(x > out.back()[0]))
+      fail(ki + "[0]", (*p)[0], "points in strictly increasing order of their first number");
+    out.push_back({x, y});
+  }
+  return out;
+}
+
+// [moisture] (physics/moisture.hpp; docs/slope.md "Moisture").
+MoistureSpec read_moisture(const toml::table& t, const std::string& P) {
+  MoistureSpec m;
+  m.enabled = true;
+  const bool linear = t.get("top_factor") || t.get("bottom_factor");
+  if (linear)
+    for (const char* k : {"profile", "adhesion", "reference_water_content_percent", "table"})
+      if (const toml::node* n = t.get(k))
+        fail(P + "." + k, *n,
+             "not with moisture.top_factor / bottom_factor (a factor linear in height, no water "
+             "contents): give either those or the water-content keys");
+  if (const toml::node* n = t.get("profile"))
+    m.profile = point_list(*n, P + ".profile", 0.0, 1.0, 100.0,
+                           "height over the model's height 0 (floor) .. 1 (crest), water "
+                           "content 0 .. 100 %");
+  if (const toml::node* n = t.get("adhesion")) {
+    const std::string a =
+        as_string(*n, P + ".adhesion", "\"proportional\", \"constant\" or \"table\"");
+    if (a == "proportional")
+      m.adhesion = MoistureSpec::Adhesion::proportional;
+    else if (a == "constant")
+      m.adhesion = MoistureSpec::Adhesion::constant;
+    else if (a == "table")
+      m.adhesion = MoistureSpec::Adhesion::table;
+    else
+      fail(P + ".adhesion", *n,
+           "\"proportional\" (F0 x w / reference_water_content_percent), \"constant\" (F0 at "
+           "every height) or \"table\" (moisture.table of [water content %, factor])");
+  }
+  if (auto v = opt_number(
+          t, P, "reference_water_content_percent", [](double x) { return x > 0 && x <= 100; },
+          "the water content of the calibrated F0, in (0, 100] [%]"))
+    m.reference_water_content_percent = *v;
+  if (const toml::node* n = t.get("table")) {
+    if (m.adhesion != MoistureSpec::Adhesion::table)
+      fail(P + ".table", *n, "only with moisture.adhesion = \"table\"");
+    m.table = point_list(*n, P + ".table", 0.0, 100.0, 1e6,
+                         "water content 0 .. 100 %, factor on F0 >= 0");
+  } else if (m.adhesion == MoistureSpec::Adhesion::table) {
+    missing(
+        P + ".table",
+        "moisture.adhesion = \"table\" needs the table: [[water content %, factor on F0], ...]");
+  }
+  if (linear) {
+    m.adhesion = MoistureSpec::Adhesion::linear_factor;
+    const std::string f = "a factor on F0 >= 0 [-]";
+    if (auto v = opt_number(t, P, "top_factor", non_negative, f)) m.top_factor = *v;
+    if (auto v = opt_number(t, P, "bottom_factor", non_negative, f)) m.bottom_factor = *v;
+  }
+  if (auto v = opt_integer(
+          t, P, "bands", [](long x) { return x >= 1 && x <= 1000; }, "1 .. 1000"))
+    m.bands = static_cast<int>(*v);
+  m.new_contacts = opt_bool(t, P, "new_contacts", true);
+  return m;
 }
 
 // A list of g-levels > 0, strictly increasing when `increasing`.
@@ -290,9 +373,27 @@ SlopeScenario parse_slope_scenario(std::string_view text, const std::string& sou
     if (auto v = opt_number(*t, P, "base_radius_m", positive,
                             "radius of the model base from the axis > 0 [m, real scale]"))
       sc.field.base_radius_m = *v;
-    if (auto v = opt_number(*t, P, "reference_radius_m", non_negative,
-                            "radius where the g-level is n, >= 0 [m] (0: the base radius)"))
-      sc.field.reference_radius_m = *v;
+    if (const toml::node* n = t->get("reference")) {
+      const std::string r = as_string(*n, P + ".reference", "\"third_depth\" or \"base\"");
+      if (r == "third_depth")
+        sc.field.reference = FieldReference::third_depth;
+      else if (r == "base")
+        sc.field.reference = FieldReference::base;
+      else
+        fail(P + ".reference", *n,
+             "\"third_depth\" (n g at one third of the model's depth below its top) or "
+             "\"base\" (n g at the model's base); or give reference_radius_m instead");
+    }
+    if (const toml::node* n = t->get("reference_radius_m")) {
+      if (t->get("reference"))
+        fail(P + ".reference_radius_m", *n,
+             "either field.reference or field.reference_radius_m, not both");
+      sc.field.reference_radius_m = as_number(*n, P + ".reference_radius_m", "a radius [m]");
+      if (!(sc.field.reference_radius_m > 0))
+        fail(P + ".reference_radius_m", *n,
+             "the radius where the g-level is n, > 0 [m, real scale]");
+      sc.field.reference = FieldReference::radius;
+    }
     if (const toml::node* n = t->get("axis")) {
       const std::string a = as_string(*n, P + ".axis", "\"y\" or \"x\"");
       if (a != "x" && a != "y")
@@ -313,14 +414,7 @@ SlopeScenario parse_slope_scenario(std::string_view text, const std::string& sou
   if (const toml::table* t = opt_table(root, "moisture", "the adhesion gradient")) {
     const std::string P = "moisture";
     check_keys(*t, P, kMoistureKeys);
-    sc.moisture.enabled = true;
-    const std::string f = "a factor on F0 >= 0 [-]";
-    if (auto v = opt_number(*t, P, "top_factor", non_negative, f)) sc.moisture.top_factor = *v;
-    if (auto v = opt_number(*t, P, "bottom_factor", non_negative, f))
-      sc.moisture.bottom_factor = *v;
-    if (auto v = opt_integer(
-            *t, P, "bands", [](long x) { return x >= 1 && x <= 1000; }, "1 .. 1000"))
-      sc.moisture.bands = static_cast<int>(*v);
+    sc.moisture = read_moisture(*t, P);
   }
 
   // [limit_equilibrium]
@@ -546,14 +640,36 @@ std::string resolved_slope_toml(const SlopeScenario& sc) {
                    contact_inline(sc.walls.chamber), sc.walls.end_wall,
                    contact_inline(sc.walls.end));
   const FieldSpec& f = sc.field;
-  o += fmt::format("\n[field]\nkind = \"{}\"\nbase_radius_m = {}\nreference_radius_m = {}\n"
-                   "axis = \"{}\"\ncoriolis = {}\n",
-                   f.kind == FieldKind::uniform ? "uniform" : "centrifuge", num(f.base_radius_m),
-                   num(f.reference_radius_m), f.axis, f.coriolis);
-  if (sc.moisture.enabled)
-    o +=
-        fmt::format("\n[moisture]\ntop_factor = {}\nbottom_factor = {}\nbands = {}\n",
-                    num(sc.moisture.top_factor), num(sc.moisture.bottom_factor), sc.moisture.bands);
+  o += fmt::format("\n[field]\nkind = \"{}\"\nbase_radius_m = {}\n",
+                   f.kind == FieldKind::uniform ? "uniform" : "centrifuge", num(f.base_radius_m));
+  if (f.reference == FieldReference::radius)
+    o += fmt::format("reference_radius_m = {}\n", num(f.reference_radius_m));
+  else
+    o += fmt::format("reference = \"{}\"\n",
+                     f.reference == FieldReference::base ? "base" : "third_depth");
+  o += fmt::format("axis = \"{}\"\ncoriolis = {}\n", f.axis, f.coriolis);
+  if (const MoistureSpec& m = sc.moisture; m.enabled) {
+    auto points = [](const std::vector<std::array<double, 2>>& p) {
+      std::string t = "[";
+      for (std::size_t k = 0; k < p.size(); ++k)
+        t += fmt::format("{}[{}, {}]", k ? ", " : "", num(p[k][0]), num(p[k][1]));
+      return t + "]";
+    };
+    o += "\n[moisture]\n";
+    if (m.adhesion == MoistureSpec::Adhesion::linear_factor) {
+      o += fmt::format("top_factor = {}\nbottom_factor = {}\n", num(m.top_factor),
+                       num(m.bottom_factor));
+    } else {
+      const char* a = m.adhesion == MoistureSpec::Adhesion::constant ? "constant"
+                      : m.adhesion == MoistureSpec::Adhesion::table  ? "table"
+                                                                     : "proportional";
+      o += fmt::format("profile = {}\nadhesion = \"{}\"\nreference_water_content_percent = {}\n",
+                       points(m.profile), a, num(m.reference_water_content_percent));
+      if (m.adhesion == MoistureSpec::Adhesion::table)
+        o += fmt::format("table = {}\n", points(m.table));
+    }
+    o += fmt::format("bands = {}\nnew_contacts = {}\n", m.bands, m.new_contacts);
+  }
   if (const LimitEquilibriumSpec& le = sc.limit_equilibrium; le.enabled)
     o += fmt::format("\n[limit_equilibrium]\ncohesion_Pa = {}\nfriction_angle_deg = {}\n"
                      "bulk_density_kg_m3 = {}\nsource = {}\n",

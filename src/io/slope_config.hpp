@@ -25,6 +25,7 @@
 #include "io/scenario.hpp"
 #include "io/specimen_config.hpp"
 #include "physics/contact_properties.hpp"
+#include "physics/moisture.hpp"
 #include "procedures/failure.hpp"
 #include "procedures/slope_geometry.hpp"
 
@@ -45,6 +46,15 @@ struct ChamberWalls {
 };
 
 enum class FieldKind { uniform, centrifuge };
+// Where the g-level n is reached in the centrifuge field (`field.reference`).
+enum class FieldReference {
+  base,        // "base": at the model's base (the chamber floor)
+  third_depth, // "third_depth": one third of the model's depth below its top, the effective
+               // radius R_top + H / 3 that centrifuge practice quotes the g-level at (it
+               // minimises the error of the vertical stress over the depth; Taylor,
+               // Geotechnical Centrifuge Technology, 1995, ch. 2)
+  radius       // `field.reference_radius_m`: a radius given [m, real scale]
+};
 
 // The body field of a trial at g-level n (physics/body_field.hpp).
 struct FieldSpec {
@@ -52,25 +62,29 @@ struct FieldSpec {
   // centrifuge: radius of the model's base (the chamber floor) from the axis
   // [m, real scale]. The paper does not give it: 2.5 m (REFERENCE.md).
   double base_radius_m = 2.5;
-  // Radius at which the g-level is n [m, real scale]; 0 = the base radius.
-  double reference_radius_m = 0.0;
+  // Where the g-level is n: default one third of the depth (the paper and the
+  // test do not say where theirs was measured).
+  FieldReference reference = FieldReference::third_depth;
+  double reference_radius_m = 0.0; // reference = radius: that radius [m, real scale]
   // Rotation axis: "y" (the section x-z is the plane of rotation, the field
   // fans out along the section) or "x" (it fans out across the breadth).
   char axis = 'y';
   bool coriolis = false; // add -2 omega x v
+  // The radius where the g-level is n, for a model of height H [m, real scale].
+  double reference_radius(double model_height_m) const {
+    switch (reference) {
+    case FieldReference::base:
+      return base_radius_m;
+    case FieldReference::third_depth:
+      return base_radius_m - 2.0 * model_height_m / 3.0;
+    case FieldReference::radius:
+      break;
+    }
+    return reference_radius_m;
+  }
 };
 
-// Moisture-graded adhesion: every contact that exists at the cut gets
-// F0 x factor(z), the factor linear in the height of the contact above the
-// floor, from `bottom_factor` at z = 0 to `top_factor` at the crest (z = H),
-// applied in `bands` horizontal bands. In the centrifuge the water drains
-// downwards, so the crest is drier (less suction, less adhesion).
-struct MoistureSpec {
-  bool enabled = false;
-  double top_factor = 1.0;    // `moisture.top_factor` [-] (>= 0)
-  double bottom_factor = 1.0; // `moisture.bottom_factor` [-] (>= 0)
-  int bands = 10;             // `moisture.bands` (1 .. 1000)
-};
+// Moisture-graded adhesion ([moisture]): MoistureSpec in physics/moisture.hpp.
 
 // `[limit_equilibrium]`: the soil's strength for the classical estimate of
 // the critical g beside the DEM (procedures/slope_stability.hpp): c and phi

@@ -66,9 +66,13 @@ CurveMisfit curve_misfit(const MeasuredCurve& measured, const SimulatedCurve& si
       *std::max_element(measured.shear_stress_Pa.begin(), measured.shear_stress_Pa.end());
   // Dilation in kPa: (weight kPa/mm) x (RMS mm) x 1000 Pa/kPa.
   const double dz_Pa = weights.dilation_kPa_per_mm * (m.rms_vertical_displacement_m * 1e3) * 1e3;
-  m.total_Pa =
-      std::sqrt(m.rms_shear_stress_Pa * m.rms_shear_stress_Pa +
-                weights.peak * m.peak_difference_Pa * m.peak_difference_Pa + dz_Pa * dz_Pa);
+  // Consolidated height in kPa: (weight kPa/um) x (difference um) x 1000 Pa/kPa.
+  if (measured.consolidated_height_m > 0)
+    m.height_difference_m = simulated.consolidated_height_m - measured.consolidated_height_m;
+  const double dh_Pa = weights.height_kPa_per_um * (m.height_difference_m * 1e6) * 1e3;
+  m.total_Pa = std::sqrt(m.rms_shear_stress_Pa * m.rms_shear_stress_Pa +
+                         weights.peak * m.peak_difference_Pa * m.peak_difference_Pa +
+                         dz_Pa * dz_Pa + dh_Pa * dh_Pa);
   return m;
 }
 

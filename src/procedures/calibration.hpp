@@ -29,7 +29,11 @@ struct MeasuredCurve {
   std::vector<double> strain;                  // rising [-]
   std::vector<double> shear_stress_Pa;         // [Pa]
   std::vector<double> vertical_displacement_m; // + dilation; empty when not measured [m]
-  std::string source;                          // the file, for messages
+  // The specimen's height after consolidation, before shearing; 0 when not
+  // measured [m]. It sees the contact stiffness without the rolling
+  // resistance, which the curves mix (docs/results/calibrate.md).
+  double consolidated_height_m = 0;
+  std::string source; // the file, for messages
 };
 
 // A simulated curve: the points of a shear run's result.
@@ -38,12 +42,14 @@ struct SimulatedCurve {
   std::vector<double> strain;                  // rising [-]
   std::vector<double> shear_stress_Pa;         // [Pa]
   std::vector<double> vertical_displacement_m; // + dilation [m]
+  double consolidated_height_m = 0;            // after consolidation [m]
 };
 
 // Optional terms beside the shear stress RMS.
 struct CurveWeights {
   double peak = 0;                // weight of the squared peak difference [-]
   double dilation_kPa_per_mm = 0; // turns the vertical displacement RMS into kPa [kPa/mm]
+  double height_kPa_per_um = 0;   // turns the consolidated height difference into kPa [kPa/um]
 };
 
 struct CurveMisfit {
@@ -51,7 +57,8 @@ struct CurveMisfit {
   double rms_shear_stress_Pa = 0;         // over the measured points inside the simulated range
   double peak_difference_Pa = 0;          // simulated peak - measured peak
   double rms_vertical_displacement_m = 0; // 0 when not measured
-  double total_Pa = 0;                    // sqrt(rms^2 + w_p dpeak^2 + (w_d rms_dz)^2)
+  double height_difference_m = 0;         // consolidated height, simulated - measured (0: none)
+  double total_Pa = 0;                    // sqrt(rms^2 + w_p dpeak^2 + (w_d rms_dz)^2 + (w_h dh)^2)
   std::size_t points = 0;                 // measured points compared
 };
 

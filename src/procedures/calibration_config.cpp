@@ -23,10 +23,18 @@ using tomlread::missing;
 namespace {
 
 const Keys kCalibrateKeys = {"stage"};
-const Keys kStageKeys = {"name",   "set",       "parameters",  "target",
-                         "budget", "tolerance", "peak_weight", "dilation_weight_kPa_per_mm"};
+const Keys kStageKeys = {"name",
+                         "set",
+                         "parameters",
+                         "target",
+                         "budget",
+                         "tolerance",
+                         "peak_weight",
+                         "dilation_weight_kPa_per_mm",
+                         "height_weight_kPa_per_um"};
 const Keys kParameterKeys = {"key", "min", "max", "start", "scale"};
-const Keys kTargetKeys = {"curves", "friction_angle_deg", "cohesion_kPa", "peak_shear_stress_kPa"};
+const Keys kTargetKeys = {"curves", "friction_angle_deg", "cohesion_kPa", "peak_shear_stress_kPa",
+                          "consolidated_height_mm"};
 const Keys kCurveFileKeys = {"file", "normal_stress_kPa"};
 
 std::string kpa(double Pa) {
@@ -152,7 +160,7 @@ std::vector<MeasuredCurve> read_measured_curves(const std::string& path, double 
       return same_pressure(c.normal_stress_Pa, sigma);
     });
     if (it == curves.end()) {
-      curves.push_back({sigma, {}, {}, {}, path});
+      curves.push_back({sigma, {}, {}, {}, 0.0, path});
       it = curves.end() - 1;
     }
     if (!it->strain.empty() && !(e > it->strain.back()))
@@ -244,6 +252,9 @@ void read_target(const toml::node& node, const std::string& P, CalibrationStage&
   const std::vector<double>& sigmas = st.normal_stresses_Pa;
   std::string pressures;
   for (double s : sigmas) pressures += (pressures.empty() ? "" : ", ") + kpa(s);
+  const toml::node* heights = t.get("consolidated_height_mm");
+  if (heights && !curves)
+    fail(P + ".consolidated_height_mm", *heights, "only beside measured curves (target.curves)");
   if (mc) {
     st.kind = CalibrationTargetKind::mohr_coulomb;
     const toml::node* f = t.get("friction_angle_deg");
@@ -340,6 +351,22 @@ void read_target(const toml::node& node, const std::string& P, CalibrationStage&
            fmt::format("a measured curve at every normal stress of the stage: none at {} kPa "
                        "(shear.normal_stresses_Pa: {} kPa; a stage's set can change them)",
                        kpa(s), pressures));
+  if (heights) {
+    const std::string hk = P + ".consolidated_height_mm";
+    const toml::array* h = heights->as_array();
+    const std::string allowed =
+        fmt::format("a list of {} specimen heights after consolidation [mm], one per normal "
+                    "stress of the stage, rising ({} kPa), each in (0, {:g}] (twice the box "
+                    "height)",
+                    st.curves.size(), pressures, 2e3 * sc.test.box.height_m);
+    if (!h || h->size() != st.curves.size()) fail(hk, *heights, allowed);
+    for (std::size_t k = 0; k < h->size(); ++k) {
+      const double mm = tomlread::as_number((*h)[k], fmt::format("{}[{}]", hk, k), allowed);
+      if (!(mm > 0 && mm <= 2e3 * sc.test.box.height_m))
+        fail(fmt::format("{}[{}]", hk, k), (*h)[k], allowed);
+      st.curves[k].consolidated_height_m = mm * 1e-3;
+    }
+  }
 }
 
 } // namespace
@@ -415,6 +442,9 @@ CalibrationScenario parse_calibration(std::string_view text, const std::string& 
     if (auto v = tomlread::opt_number(
             t, P, "dilation_weight_kPa_per_mm", [](double x) { return x >= 0; }, ">= 0 [kPa/mm]"))
       st.weights.dilation_kPa_per_mm = *v;
+    if (auto v = tomlread::opt_number(
+            t, P, "height_weight_kPa_per_um", [](double x) { return x >= 0; }, ">= 0 [kPa/um]"))
+      st.weights.height_kPa_per_um = *v;
     // The stage's scenario at the starts: checks `set` and every parameter key.
     ShearScenario sc;
     try {
@@ -443,6 +473,14 @@ CalibrationScenario parse_calibration(std::string_view text, const std::string& 
               "{ peak_shear_stress_kPa = [...] }",
               t);
     read_target(*tn, P + ".target", st, sc, base_dir);
+    const bool heights =
+        st.kind == CalibrationTargetKind::curves && st.curves.front().consolidated_height_m > 0;
+    if (heights != (st.weights.height_kPa_per_um > 0))
+      throw InputError(heights ? P + ".height_weight_kPa_per_um" : P + ".target",
+                       heights ? "(not given)" : "(no consolidated_height_mm)",
+                       "measured consolidated heights and a weight > 0 for them go together: "
+                       "target.consolidated_height_mm = [...] with height_weight_kPa_per_um "
+                       "(e.g. 1: a micrometre counts as a kPa)");
     for (const CalibrationParameter& p : st.parameters)
       earlier.push_back(parameter_override(p, p.start));
     c.stages.push_back(std::move(st));

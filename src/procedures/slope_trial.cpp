@@ -8,6 +8,7 @@
 #include "io/vtk.hpp"
 #include "physics/body_field.hpp"
 #include "procedures/checkpointed_cycling.hpp"
+#include "procedures/moisture.hpp"
 #include "procedures/slope_stability.hpp"
 #include "procedures/specimen.hpp"
 
@@ -126,34 +127,7 @@ Progress load_progress(const std::string& blob, json& monitor_state, const std::
   return p;
 }
 
-ContactProperties graded(ContactProperties c, double factor) {
-  c.attraction_force_N *= factor;
-  return c;
-}
-
 } // namespace
-
-std::size_t grade_attraction_by_height(World& world, const ContactProperties& base,
-                                       const MoistureSpec& moisture, double height_m) {
-  const int nb = moisture.bands;
-  const double H = height_m;
-  const auto& P = world.particles();
-  std::size_t changed = 0;
-  for (int b = 0; b < nb; ++b) {
-    const double z0 = b == 0 ? -INFINITY : H * b / nb;
-    const double z1 = b == nb - 1 ? INFINITY : H * (b + 1) / nb;
-    const double zc = H * (b + 0.5) / nb;
-    const double factor =
-        moisture.bottom_factor + (moisture.top_factor - moisture.bottom_factor) * zc / H;
-    changed += world.modify_ball_ball_contacts(
-        [&](std::size_t i, std::size_t j) {
-          const double z = 0.5 * (P.position[i].z + P.position[j].z);
-          return z >= z0 && z < z1;
-        },
-        [&](ContactProperties& c) { c = graded(base, factor); });
-  }
-  return changed;
-}
 
 const LevelResult* SlopeTrialResult::first_failure() const {
   for (const LevelResult& l : levels)
@@ -164,8 +138,7 @@ const LevelResult* SlopeTrialResult::first_failure() const {
 BodyField slope_field(const SlopeScenario& sc, const SlopeGeometry& g, double g_level) {
   const double s = g.scale();
   if (sc.field.kind == FieldKind::uniform) return BodyField::scaled_gravity(g_level, s);
-  const double r_ref =
-      sc.field.reference_radius_m > 0 ? sc.field.reference_radius_m : sc.field.base_radius_m;
+  const double r_ref = sc.field.reference_radius(sc.slope.total_height_m);
   // The chamber's middle (the end of the model, x = length) under the axis.
   const Vec3 base{g.length(), 0.5 * g.breadth(), 0.0};
   const Vec3 axis = sc.field.axis == 'x' ? Vec3{1, 0, 0} : Vec3{0, 1, 0};
@@ -330,10 +303,19 @@ SlopeTrialResult run_slope_trial(const SlopeScenario& sc, const SlopeTrialPlan& 
                                       [&](ContactProperties& c) { c = at_cut; });
     }
     world.set_ball_ball_defaults(sc.soil_after_cut());
+    if (sc.moisture.enabled && sc.moisture.new_contacts)
+      grade_new_contacts_by_height(world, sc.soil_after_cut(), sc.moisture, geometry.height());
     world.reset_displacements();
     pr.slope_particles = world.particles().size();
     say(fmt::format("cut: {} particles excavated, {} remain in the slope", pr.excavated,
                     pr.slope_particles));
+    if (sc.moisture.enabled) {
+      const std::vector<double> band = band_attraction_factors(sc.moisture);
+      say(fmt::format(
+          "moisture: F0 x {:.3f} in the lowest of {} bands to x {:.3f} in the highest{}",
+          band.front(), band.size(), band.back(),
+          sc.moisture.new_contacts ? "; contacts made later by where they are made" : ""));
+    }
     pr.phase = 1;
     pr.level = 0;
     pr.level_first_step = world.step_count();

@@ -8,9 +8,11 @@
 //               first g-level (mean unbalanced-force ratio below
 //               trial.equilibrium_ratio, kinetic energy below
 //               trial.rest_kinetic_ratio);
-//   cut         the excavation deleted (centre based); F0 graded with height
-//               when [moisture] is given; new contacts from now on get
-//               trial.after_cut (mu_r = 0, F0 = 0); displacements reset;
+//   cut         the excavation deleted (centre based); with [moisture] F0
+//               graded by the height of each contact (procedures/
+//               moisture.hpp); new contacts from now on get trial.after_cut
+//               (mu_r = 0), their F0 graded by the height where they are
+//               made; displacements reset;
 //   level       cycling under the level's field, a failure check every
 //               trial.check_interval_steps, until the FailureMonitor says
 //               stable, or failed and the slide came to rest (or
@@ -84,15 +86,6 @@ struct SlopeTrialOptions {
 
 // The body field of a trial at g-level n (uniform n g / s, or the radial
 // centrifuge field with the chamber's middle under the axis).
-// The moisture grading of F0 at the cut ([moisture], Tao et al. section 3.3:
-// drier near the crest): the model's height H in `bands` equal bands, each
-// ball-ball contact (by the mean height of its two centres) gets `base` with
-// F0 x (bottom + (top - bottom) z_c / H), z_c the middle of its band; the
-// lowest and highest bands reach below 0 and above H. Returns the contacts
-// changed.
-std::size_t grade_attraction_by_height(World& world, const ContactProperties& base,
-                                       const MoistureSpec& moisture, double height_m);
-
 BodyField slope_field(const SlopeScenario& sc, const SlopeGeometry& geometry, double g_level);
 
 // The framing every picture of a trial shares: the window (the slope's

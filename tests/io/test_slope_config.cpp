@@ -109,6 +109,66 @@ TEST(SlopeConfig, BadKeysAreNamed) {
   EXPECT_EQ(message_of(t), "(accepted)");
 }
 
+// The centrifuge field's reference and the moisture keys (issue 21): read,
+// written into the resolved scenario and read back alike; each bad value named
+// by its key with what is allowed.
+TEST(SlopeConfig, FieldReferenceAndMoistureKeysAreReadBackAndValidated) {
+  const std::string t = paper_text();
+  const std::string radial = replaced(t, "kind = \"uniform\"", "kind = \"centrifuge\"");
+  const std::string moist = "\n[moisture]\nprofile = [[0, 9.2], [1, 5.5]]\nadhesion = \"table\"\n"
+                            "table = [[5, 0.5], [10, 1.5]]\nbands = 6\nnew_contacts = false\n";
+  const std::string good =
+      replaced(radial, "kind = \"centrifuge\"", "kind = \"centrifuge\"\nreference = \"base\"") +
+      moist;
+  const SlopeScenario a = parse_slope_scenario(good, "good.toml", kPaper.string());
+  EXPECT_EQ(a.field.reference, FieldReference::base);
+  EXPECT_DOUBLE_EQ(a.field.reference_radius(0.18), 2.5);
+  ASSERT_TRUE(a.moisture.enabled);
+  EXPECT_EQ(a.moisture.adhesion, MoistureSpec::Adhesion::table);
+  EXPECT_EQ(a.moisture.profile.size(), 2u);
+  EXPECT_EQ(a.moisture.table.size(), 2u);
+  EXPECT_EQ(a.moisture.bands, 6);
+  EXPECT_FALSE(a.moisture.new_contacts);
+  const std::string once = resolved_slope_toml(a);
+  EXPECT_EQ(resolved_slope_toml(parse_slope_scenario(once, "resolved.toml", kPaper.string())),
+            once);
+  // Defaults: the g-level at one third of the depth; the test's profile, proportional.
+  const SlopeScenario d =
+      parse_slope_scenario(radial + "\n[moisture]\n", "defaults.toml", kPaper.string());
+  EXPECT_EQ(d.field.reference, FieldReference::third_depth);
+  EXPECT_EQ(d.moisture.adhesion, MoistureSpec::Adhesion::proportional);
+  EXPECT_EQ(d.moisture.profile, (MoistureSpec{}.profile));
+
+  struct Bad {
+    std::string text, key;
+  };
+  const std::vector<Bad> bad = {
+      {replaced(radial, "kind = \"centrifuge\"", "kind = \"centrifuge\"\nreference = \"top\""),
+       "field.reference"},
+      {replaced(radial, "kind = \"centrifuge\"",
+                "kind = \"centrifuge\"\nreference = \"base\"\nreference_radius_m = 2.4"),
+       "field.reference_radius_m"},
+      {replaced(radial, "kind = \"centrifuge\"", "kind = \"centrifuge\"\nreference_radius_m = 0"),
+       "field.reference_radius_m"},
+      {t + "\n[moisture]\nprofile = [[0, 9.2], [0, 5.5]]\n", "moisture.profile[1][0]"},
+      {t + "\n[moisture]\nprofile = [[0, 150]]\n", "moisture.profile[0][1]"},
+      {t + "\n[moisture]\nprofile = [[0, 9.2, 1]]\n", "moisture.profile[0]"},
+      {t + "\n[moisture]\nprofile = [[1.5, 9.2]]\n", "moisture.profile[0][0]"},
+      {t + "\n[moisture]\nadhesion = \"linear\"\n", "moisture.adhesion"},
+      {t + "\n[moisture]\ntable = [[5, 1]]\n", "moisture.table"},
+      {t + "\n[moisture]\nadhesion = \"table\"\n", "moisture.table"},
+      {t + "\n[moisture]\ntop_factor = 0.5\nprofile = [[0, 9.2]]\n", "moisture.profile"},
+      {t + "\n[moisture]\nreference_water_content_percent = 0\n",
+       "moisture.reference_water_content_percent"},
+      {t + "\n[moisture]\nbands = 0\n", "moisture.bands"},
+      {t + "\n[moisture]\nnew_contacts = 1\n", "moisture.new_contacts"},
+  };
+  for (const Bad& b : bad) {
+    const std::string m = message_of(b.text);
+    EXPECT_NE(m.find(b.key), std::string::npos) << b.key << ": " << m;
+  }
+}
+
 // Acceptance 1: the foundation has the paper's 47,070 particles within 5 %,
 // and cutting each slope out of it leaves the paper's 30,044 / 31,020 within
 // 5 % (the full trials, which cut the settled foundation, report theirs).

@@ -63,6 +63,18 @@ TEST(CalibrationMisfit, CurveAgainstHandComputedValues) {
   EXPECT_NEAR(dil.rms_vertical_displacement_m, std::sqrt(5.0 / 3.0) * 1e-6, 1e-15);
   EXPECT_NEAR(dil.total_Pa, std::sqrt(12.0 + 4.0 + 5.0 / 3.0) * 1e3, 1e-6);
 
+  // Consolidated height: simulated 2.995 mm against 2.998 measured, -3 um; at
+  // 1 kPa/um that is 3 kPa, and the total sqrt(12 + 4 + 9) = 5 kPa. Not
+  // measured (0): no term, whatever the weight.
+  MeasuredCurve mh = m;
+  mh.consolidated_height_m = 2.998e-3;
+  SimulatedCurve sh = s;
+  sh.consolidated_height_m = 2.995e-3;
+  const CurveMisfit height = curve_misfit(mh, sh, {1.0, 0.0, 1.0});
+  EXPECT_NEAR(height.height_difference_m, -3e-6, 1e-15);
+  EXPECT_NEAR(height.total_Pa, 5e3, 1e-6);
+  EXPECT_NEAR(curve_misfit(m, sh, {1.0, 0.0, 1.0}).total_Pa, 4e3, 1e-9);
+
   // Two pressures with totals 3 and 4 kPa: sqrt((9 + 16) / 2) kPa.
   CurveMisfit a, b;
   a.total_Pa = 3e3;
@@ -341,6 +353,26 @@ TEST_F(CalibrationConfig, BadParametersAreNamedByKey) {
 
   e = error_of("target = { peak_shear_stress_kPa = [30] }\n" + kGoodParameters);
   EXPECT_NE(e.find("one per normal stress"), std::string::npos) << e;
+
+  // Consolidated heights: one per pressure, inside the box, with their weight.
+  const std::string curves = "target = { curves = [\"both.csv\"], consolidated_height_mm = ";
+  const CalibrationScenario h =
+      parse(curves + "[2.9, 2.8] }\nheight_weight_kPa_per_um = 1\n" + kGoodParameters);
+  EXPECT_DOUBLE_EQ(h.stages[0].curves[1].consolidated_height_m, 2.8e-3);
+  EXPECT_DOUBLE_EQ(h.stages[0].weights.height_kPa_per_um, 1.0);
+  e = error_of(curves + "[2.9] }\nheight_weight_kPa_per_um = 1\n" + kGoodParameters);
+  EXPECT_NE(e.find("calibrate.stage[1].target.consolidated_height_mm"), std::string::npos) << e;
+  e = error_of(curves + "[2.9, 6.5] }\nheight_weight_kPa_per_um = 1\n" + kGoodParameters);
+  EXPECT_NE(e.find("consolidated_height_mm[1]"), std::string::npos) << e;
+  e = error_of(curves + "[2.9, 2.8] }\n" + kGoodParameters);
+  EXPECT_NE(e.find("calibrate.stage[1].height_weight_kPa_per_um"), std::string::npos) << e;
+  e = error_of("target = { curves = [\"both.csv\"] }\nheight_weight_kPa_per_um = 1\n" +
+               kGoodParameters);
+  EXPECT_NE(e.find("consolidated_height_mm"), std::string::npos) << e;
+  e = error_of("target = { peak_shear_stress_kPa = [30, 90], consolidated_height_mm = [2.9, 2.8] "
+               "}\n" +
+               kGoodParameters);
+  EXPECT_NE(e.find("only beside measured curves"), std::string::npos) << e;
 }
 
 // Two stages as the paper's: the second has its own pressures (its `set`) and
