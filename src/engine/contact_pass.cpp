@@ -22,9 +22,8 @@ void World::compute_contacts() {
 // the defaults are graded by height (set_ball_ball_defaults_by_height). Out
 // of line: called once per contact born, kept out of the contact loop's code.
 [[gnu::noinline]] std::uint16_t World::graded_default(double z_m) const {
-  const double b = std::floor((z_m - band_z0_) / band_height_);
-  const int last = static_cast<int>(band_props_.size()) - 1;
-  return band_props_[!(b > 0) ? 0 : b >= last ? last : static_cast<int>(b)];
+  return band_props_[height_band(z_m, band_z0_, band_height_,
+                                 static_cast<int>(band_props_.size()))];
 }
 
 template <bool Periodic> void World::compute_contacts_impl() {

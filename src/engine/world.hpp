@@ -10,6 +10,7 @@
 #include "physics/contact_properties.hpp"
 
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <functional>
 #include <optional>
@@ -167,6 +168,12 @@ public:
     std::vector<ContactProperties> per_band; // the defaults of each band, from the bottom
   };
   void set_ball_ball_defaults_by_height(const HeightGradedDefaults& g);
+  // The band of height z among n bands of height dz from z0 (the rule above;
+  // also what procedures use to grade existing contacts alike).
+  static int height_band(double z_m, double z0_m, double band_height_m, int n) {
+    const double b = std::floor((z_m - z0_m) / band_height_m);
+    return !(b > 0) ? 0 : b >= n - 1 ? n - 1 : static_cast<int>(b);
+  }
   HeightGradedDefaults ball_ball_defaults_by_height() const;
   const ContactProperties& ball_ball_defaults() const { return props_[ball_ball_default_]; }
   void set_wall_defaults(std::size_t wall, const ContactProperties& p);

@@ -28,16 +28,15 @@ std::size_t grade_attraction_by_height(World& world, const ContactProperties& ba
   const double H = height_m;
   const auto& P = world.particles();
   std::size_t changed = 0;
-  for (int b = 0; b < nb; ++b) {
-    const double z0 = b == 0 ? -INFINITY : H * b / nb;
-    const double z1 = b == nb - 1 ? INFINITY : H * (b + 1) / nb;
+  // The engine's band rule, so that a contact graded here and one born at the
+  // same height later fall in the same band.
+  for (int b = 0; b < nb; ++b)
     changed += world.modify_ball_ball_contacts(
         [&](std::size_t i, std::size_t j) {
           const double z = 0.5 * (P.position[i].z + P.position[j].z);
-          return z >= z0 && z < z1;
+          return World::height_band(z, 0.0, H / nb, nb) == b;
         },
         [&](ContactProperties& c) { c = graded(base, factor[b]); });
-  }
   return changed;
 }
 
