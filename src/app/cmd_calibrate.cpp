@@ -8,11 +8,11 @@
 #include "io/csv.hpp"
 #include "io/output.hpp"
 #include "io/plot.hpp"
-#include "io/shear_config.hpp"
 #include "io/toml_read.hpp"
 #include "procedures/calibration.hpp"
 #include "procedures/calibration_config.hpp"
 #include "procedures/direct_shear.hpp"
+#include "procedures/shear_config.hpp"
 
 #include <CLI/CLI.hpp>
 #include <algorithm>

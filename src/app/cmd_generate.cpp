@@ -7,11 +7,11 @@
 #include "io/checkpoint.hpp"
 #include "io/output.hpp"
 #include "io/particle_file.hpp"
-#include "io/slope_config.hpp"
 #include "io/specimen_config.hpp"
 #include "io/vtk.hpp"
 #include "procedures/foundation.hpp"
 #include "procedures/gsd.hpp"
+#include "procedures/slope_config.hpp"
 #include "procedures/slope_geometry.hpp"
 #include "procedures/specimen.hpp"
 

@@ -5,8 +5,8 @@
 #include "io/csv.hpp"
 #include "io/picture.hpp"
 #include "io/plot.hpp"
-#include "io/slope_config.hpp"
 #include "io/vtk_read.hpp"
+#include "procedures/slope_config.hpp"
 #include "procedures/slope_geometry.hpp"
 #include "procedures/slope_trial.hpp"
 

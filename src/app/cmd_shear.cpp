@@ -9,8 +9,8 @@
 #include "io/csv.hpp"
 #include "io/output.hpp"
 #include "io/plot.hpp"
-#include "io/shear_config.hpp"
 #include "procedures/direct_shear.hpp"
+#include "procedures/shear_config.hpp"
 #include "procedures/specimen.hpp"
 
 #include <CLI/CLI.hpp>

@@ -6,8 +6,8 @@
 #include "base/interrupt.hpp"
 #include "io/output.hpp"
 #include "io/plot.hpp"
-#include "io/slope_config.hpp"
 #include "procedures/foundation.hpp"
+#include "procedures/slope_config.hpp"
 #include "procedures/slope_stability.hpp"
 #include "procedures/slope_trial.hpp"
 

@@ -9,8 +9,8 @@
 // and what is allowed.
 #pragma once
 
-#include "io/shear_config.hpp"
 #include "procedures/calibration.hpp"
+#include "procedures/shear_config.hpp"
 
 #include <string>
 #include <string_view>

@@ -19,7 +19,7 @@
 // at its own g-level before the cut.
 #pragma once
 
-#include "io/slope_config.hpp"
+#include "procedures/slope_config.hpp"
 #include "procedures/slope_geometry.hpp"
 
 #include <array>

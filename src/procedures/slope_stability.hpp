@@ -11,8 +11,8 @@
 // carry no shear in this estimate).
 #pragma once
 
-#include "io/slope_config.hpp"
 #include "procedures/limit_equilibrium.hpp"
+#include "procedures/slope_config.hpp"
 #include "procedures/slope_geometry.hpp"
 
 #include <nlohmann/json_fwd.hpp>

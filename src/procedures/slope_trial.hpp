@@ -30,10 +30,10 @@
 // is resumed from it; one holding result.json is finished.
 #pragma once
 
-#include "io/slope_config.hpp"
 #include "io/specimen_config.hpp"
 #include "procedures/failure.hpp"
 #include "procedures/foundation.hpp"
+#include "procedures/slope_config.hpp"
 #include "procedures/slope_geometry.hpp"
 
 #include <functional>

@@ -1,5 +1,5 @@
 // The centrifuge field through World runs (physics/body_field.hpp, the slope's
-// [field] in io/slope_config.hpp): free particles, no contacts, a few steps of
+// [field] in procedures/slope_config.hpp): free particles, no contacts, a few steps of
 // a fixed timestep, the acceleration read as the change of velocity over the
 // time. With 10 steps of 1e-8 s a particle moves less than 1e-10 m, so the
 // field it samples is the field at its start to about 1e-9 relative; the
@@ -12,7 +12,7 @@
 // x / rho; and a particle moving outwards at v is pushed against the sense of
 // rotation by the Coriolis acceleration 2 omega v.
 #include "engine/world.hpp"
-#include "io/slope_config.hpp"
+#include "procedures/slope_config.hpp"
 
 #include <gtest/gtest.h>
 

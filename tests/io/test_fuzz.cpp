@@ -27,9 +27,9 @@
 #include "base/errors.hpp"
 #include "io/particle_file.hpp"
 #include "io/scenario.hpp"
-#include "io/shear_config.hpp"
-#include "io/slope_config.hpp"
 #include "io/specimen_config.hpp"
+#include "procedures/shear_config.hpp"
+#include "procedures/slope_config.hpp"
 
 #include <gtest/gtest.h>
 

@@ -9,12 +9,12 @@
 #include "base/errors.hpp"
 #include "engine/world.hpp"
 #include "io/checkpoint.hpp"
-#include "io/shear_config.hpp"
-#include "io/slope_config.hpp"
 #include "physics/body_field.hpp"
 #include "procedures/direct_shear.hpp"
 #include "procedures/foundation.hpp"
 #include "procedures/paper_material.hpp"
+#include "procedures/shear_config.hpp"
+#include "procedures/slope_config.hpp"
 #include "procedures/specimen.hpp"
 
 #include <algorithm>

@@ -8,9 +8,9 @@
 // F0 x (1.5 - (b + 0.5) / 4), that is 1.375, 1.125, 0.875 and 0.625 F0; nothing else changes.
 #include "engine/world.hpp"
 #include "io/checkpoint.hpp"
-#include "io/slope_config.hpp"
 #include "procedures/moisture.hpp"
 #include "procedures/paper_material.hpp"
+#include "procedures/slope_config.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -7,8 +7,8 @@
 // See docs/shear.md for the measured run times (hours per pressure).
 #include "engine/world.hpp"
 #include "io/csv.hpp"
-#include "io/shear_config.hpp"
 #include "procedures/direct_shear.hpp"
+#include "procedures/shear_config.hpp"
 #include "procedures/specimen.hpp"
 
 #include <cmath>

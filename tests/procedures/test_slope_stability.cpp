@@ -5,8 +5,8 @@
 // proportional to c, inversely proportional to the bulk density, and the same
 // at any size reduction factor s (H goes with s, the DEM's gamma with n / s).
 #include "base/errors.hpp"
-#include "io/slope_config.hpp"
 #include "procedures/foundation.hpp"
+#include "procedures/slope_config.hpp"
 #include "procedures/slope_stability.hpp"
 
 #include <cmath>

@@ -7,7 +7,7 @@
 // bit for bit where an uninterrupted one does (issue 6, items 1 and 3).
 #include "base/errors.hpp"
 #include "base/interrupt.hpp"
-#include "io/slope_config.hpp"
+#include "procedures/slope_config.hpp"
 #include "procedures/slope_trial.hpp"
 #include "vtk_test_util.hpp"
 

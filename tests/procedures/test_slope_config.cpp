@@ -4,7 +4,7 @@
 // foundation and slopes have the paper's particle counts (issue 5, item 1).
 #include "base/errors.hpp"
 #include "engine/world.hpp"
-#include "io/slope_config.hpp"
+#include "procedures/slope_config.hpp"
 #include "procedures/slope_geometry.hpp"
 #include "procedures/specimen.hpp"
 

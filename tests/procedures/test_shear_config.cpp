@@ -2,7 +2,7 @@
 // scenario resolves every default, the examples parse, and every class of bad
 // key is rejected with an InputError naming the dotted key.
 #include "base/errors.hpp"
-#include "io/shear_config.hpp"
+#include "procedures/shear_config.hpp"
 
 #include <gtest/gtest.h>
 #include <string>

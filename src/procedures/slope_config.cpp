@@ -1,4 +1,4 @@
-#include "io/slope_config.hpp"
+#include "procedures/slope_config.hpp"
 
 #include "base/errors.hpp"
 #include "io/scenario.hpp"

@@ -1,4 +1,4 @@
-#include "io/shear_config.hpp"
+#include "procedures/shear_config.hpp"
 #include "io/toml_read.hpp"
 
 #include "base/errors.hpp"
