@@ -320,6 +320,7 @@ int run_shear_command(const ShearCommandOptions& o) {
   ShearScenario sc;
   std::vector<double> sigmas;
   fs::path out;
+  int jobs_wanted = o.jobs, threads_wanted = o.threads; // --resume: the started run's
   const bool report_only = !o.report_dir.empty();
   if (report_only && !o.resume_dir.empty())
     throw InputError("--report", o.report_dir, "either --report or --resume, not both");
@@ -336,8 +337,14 @@ int run_shear_command(const ShearCommandOptions& o) {
                        "not a shear run folder (scenario.toml and pressures.json missing)");
     sc = load_shear_scenario((out / "scenario.toml").string());
     try {
-      sigmas =
-          read_json(out / "pressures.json").at("normal_stresses_Pa").get<std::vector<double>>();
+      const nlohmann::json started = read_json(out / "pressures.json");
+      sigmas = started.at("normal_stresses_Pa").get<std::vector<double>>();
+      // A resume runs as the run was started unless the command line says otherwise (folders
+      // written before these two keys existed resume with the defaults).
+      if (!o.jobs_given && started.contains("jobs"))
+        jobs_wanted = std::max(1, started.at("jobs").get<int>());
+      if (o.threads < 0 && started.contains("threads_per_run"))
+        threads_wanted = std::max(0, started.at("threads_per_run").get<int>());
     } catch (const nlohmann::json::exception& e) {
       throw InputError(flag, (out / "pressures.json").string(),
                        std::string("a pressures.json written by centridem shear (") + e.what() +
@@ -393,10 +400,14 @@ int run_shear_command(const ShearCommandOptions& o) {
     for (double s : sigmas) fs::remove(out / (run_stem(s) + ".json")); // stale results
     write_text(out / "scenario.toml", resolved_shear_toml(sc));
     write_text(out / "pressures.json",
-               nlohmann::json{{"normal_stresses_Pa", sigmas}}.dump(1) + "\n");
+               nlohmann::json{{"normal_stresses_Pa", sigmas},
+                              {"jobs", o.jobs},
+                              {"threads_per_run", o.threads >= 0 ? o.threads : sc.threads}}
+                       .dump(1) +
+                   "\n");
   }
-  const int threads = o.threads >= 0 ? o.threads : sc.threads;
-  const int jobs = std::min<int>(o.jobs, static_cast<int>(sigmas.size()));
+  const int threads = threads_wanted >= 0 ? threads_wanted : sc.threads;
+  const int jobs = std::min<int>(jobs_wanted, static_cast<int>(sigmas.size()));
   if (!report_only)
     fmt::print(
         stderr,
@@ -549,8 +560,10 @@ CLI::App* add_shear_subcommand(CLI::App& app) {
   cmd->add_option("scenario", o->scenario,
                   "scenario file (TOML) with [specimen], [contact.ball_ball] and [shear]");
   cmd->add_option("--out", o->out_dir, "output folder (default: runs/<scenario stem>_shear)");
-  cmd->add_option("--resume", o->resume_dir,
-                  "continue the runs in this folder from their last checkpoints");
+  cmd->add_option(
+      "--resume", o->resume_dir,
+      "continue the runs in this folder from their last checkpoints (with the --jobs and "
+      "--threads they were started with, unless given again)");
   cmd->add_option("--report", o->report_dir,
                   "run nothing: rewrite the summary and plots of this run folder from what it "
                   "holds now (unfinished runs' curves so far drawn dashed, not in the fits)");
@@ -565,7 +578,8 @@ CLI::App* add_shear_subcommand(CLI::App& app) {
                           "default)");
   cli::add_set_option(*cmd, o->set);
   cli::add_check_flag(*cmd, o->check);
-  cmd->callback([o]() {
+  cmd->callback([o, cmd]() {
+    o->jobs_given = cmd->count("--jobs") > 0;
     cli::run_subcommand([o] { return run_shear_command(*o); },
                         [o] {
                           fmt::print(stderr,

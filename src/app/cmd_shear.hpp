@@ -28,8 +28,11 @@ struct ShearCommandOptions {
   std::string resume_dir;            // continue the runs in this folder
   std::string report_dir;            // only rewrite this folder's summary and plots
   int jobs = 1;                      // parallel runs (child processes)
+  bool jobs_given = true;            // false: no --jobs on the command line, so --resume takes
+                                     // the started run's (pressures.json)
   std::vector<double> pressures_kPa; // empty: the scenario's list
-  int threads = -1;                  // per run; < 0: the scenario's shear.threads
+  int threads = -1;                  // per run; < 0: the started run's (--resume), else the
+                                     // scenario's shear.threads
   double progress_interval_s = 10.0; // seconds between progress lines
   std::vector<std::string> set;      // --set KEY=VALUE over the scenario
   bool check = false;                // --check: print the resolved scenario, run nothing

@@ -194,14 +194,14 @@ long unstable_step(const std::string& out) {
 // the servo presses the grains into each other beyond the overlap guard. The run must stop with
 // exit 3 naming the particles, the step and the likely cause, keep the checkpoint written at the
 // start of shearing, and `--resume` from it must reach the same instability at the same step
-// (the checkpoint is intact and the run deterministic).
+// (the checkpoint is intact and the run deterministic), with the two threads it was started with.
 TEST(Instability, ShearCommandExitsWith3AndKeepsAResumableCheckpoint) {
   testutil::TempDir dir("centridem_unstable_shear");
   std::ofstream(dir / "box.toml") << testutil::kSmallShearBox;
   const std::string out = (dir / "out").string();
   const auto first =
-      testutil::run_centridem({"shear", (dir / "box.toml").string(), "--out", out, "--set",
-                               "shear.during_shear={effective_modulus_Pa=1e4}"},
+      testutil::run_centridem({"shear", (dir / "box.toml").string(), "--out", out, "--threads", "2",
+                               "--set", "shear.during_shear={effective_modulus_Pa=1e4}"},
                               dir / "first.log", 600);
   ASSERT_EQ(first.code, 3) << first.output;
   EXPECT_NE(first.output.find("centridem: unstable: "), std::string::npos) << first.output;
@@ -215,6 +215,8 @@ TEST(Instability, ShearCommandExitsWith3AndKeepsAResumableCheckpoint) {
   const auto again = testutil::run_centridem({"shear", "--resume", out}, dir / "again.log", 600);
   EXPECT_EQ(again.code, 3) << again.output;
   EXPECT_NE(again.output.find("resuming"), std::string::npos) << again.output;
+  // The resume runs with the threads it was started with (pressures.json), not shear.threads.
+  EXPECT_NE(again.output.find("2 thread(s) per run"), std::string::npos) << again.output;
   EXPECT_EQ(unstable_step(again.output), step) << again.output;
 }
 
@@ -241,6 +243,8 @@ TEST(Instability, SlopeCommandExitsWith3AndKeepsAResumableCheckpoint) {
   const auto again = testutil::run_centridem({"slope", "--resume", out}, dir / "again.log", 600);
   EXPECT_EQ(again.code, 3) << again.output;
   EXPECT_NE(again.output.find("resuming"), std::string::npos) << again.output;
+  // The resume runs with the threads it was started with (pressures.json), not shear.threads.
+  EXPECT_NE(again.output.find("2 thread(s) per run"), std::string::npos) << again.output;
   EXPECT_EQ(unstable_step(again.output), step) << again.output;
 }
 
