@@ -229,7 +229,12 @@ void prepare_foundation(World& world, const SlopeScenario& sc, const SlopeGeomet
   f.prepared = true;
   f.generated_particles = world.particles().size();
   f.compaction_g_level = prep.compaction_g_level;
-  world.set_body_field(slope_field(sc, geometry, prep.compaction_g_level));
+  // Uniform n g / s whatever the trial's field: the compaction stands for the
+  // model's preparation in the laboratory, before it is spun; the radial field
+  // acts from the trial on (which brings the foundation to rest in it before
+  // the cut). So every field shares one foundation, and comparisons between
+  // fields are not blurred by packing scatter (docs/results/centrifuge.md).
+  world.set_body_field(BodyField::scaled_gravity(prep.compaction_g_level, geometry.scale()));
   const double d50 = median_diameter(world.particles());
   const Vec3 floor_centre{0.5 * L, 0.5 * B, 0.0};
 
@@ -335,7 +340,10 @@ void prepare_foundation(World& world, const SlopeScenario& sc, const SlopeGeomet
 std::string prepared_foundation_path(const SlopeScenario& sc, const std::string& cache_dir) {
   if (cache_dir.empty())
     throw InputError("--cache", "\"\"", "a folder for the prepared foundation");
-  // The key: everything that changes the prepared foundation.
+  // The key: everything that changes the prepared foundation. The field is
+  // not among them (prepared under uniform gravity, above); the recipe keeps
+  // its line with the defaults so that earlier cache entries stay valid.
+  const FieldSpec field{};
   SpecimenSpec spec = sc.specimen;
   spec.region.reset();
   const SlopeGeometry geometry(sc.slope);
@@ -347,10 +355,10 @@ std::string prepared_foundation_path(const SlopeScenario& sc, const std::string&
       tomlread::contact_inline(sc.soil()), tomlread::contact_inline(sc.walls.chamber),
       tomlread::contact_inline(sc.walls.end), sc.walls.end_wall, tomlread::num(geometry.length()),
       tomlread::num(geometry.breadth()), tomlread::num(geometry.height()),
-      sc.field.kind == FieldKind::uniform ? "uniform" : "centrifuge",
-      tomlread::num(sc.field.base_radius_m), tomlread::num(sc.field.reference_radius_m),
-      sc.field.axis, sc.field.coriolis, tomlread::num(sc.trial.rest_kinetic_ratio),
-      sc.trial.check_interval_steps, tomlread::num(sc.trial.local_damping));
+      field.kind == FieldKind::uniform ? "uniform" : "centrifuge",
+      tomlread::num(field.base_radius_m), tomlread::num(field.reference_radius_m), field.axis,
+      field.coriolis, tomlread::num(sc.trial.rest_kinetic_ratio), sc.trial.check_interval_steps,
+      tomlread::num(sc.trial.local_damping));
   return (fs::path(cache_dir) / fmt::format("foundation_{:016x}.bin", fnv1a(recipe))).string();
 }
 

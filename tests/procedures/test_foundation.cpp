@@ -218,6 +218,13 @@ TEST(Foundation, PreparedUnderGravityIsHomogeneousTrimmedToTheDesignAndCached) {
   other = sc;
   other.ball_ball.attraction_range_m = 2e-6;
   EXPECT_NE(prepared_foundation_path(other, cache), pf.path);
+  // The field is not in the key: the foundation is compacted under uniform
+  // gravity whatever the trial's field, so trials in the radial field share it.
+  other = sc;
+  other.field.kind = FieldKind::centrifuge;
+  other.field.base_radius_m = 1.5;
+  other.field.coriolis = true;
+  EXPECT_EQ(prepared_foundation_path(other, cache), pf.path);
   fs::remove_all(cache);
 }
 
