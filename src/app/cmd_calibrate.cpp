@@ -64,6 +64,12 @@ std::vector<std::string> part_names(const CalibrationStage& st) {
     if (st.weights.height_kPa_per_um > 0)
       for (double s : st.normal_stresses_Pa)
         n.push_back("height_difference_at_" + kpa(s) + "kPa_um");
+    if (st.curves.front().unloading_modulus_Pa > 0)
+      for (double s : st.normal_stresses_Pa)
+        n.push_back("unloading_modulus_difference_at_" + kpa(s) + "kPa_percent");
+    if (st.curves.front().reloading_modulus_Pa > 0)
+      for (double s : st.normal_stresses_Pa)
+        n.push_back("reloading_modulus_difference_at_" + kpa(s) + "kPa_percent");
     break;
   case CalibrationTargetKind::peak_stresses:
     for (double s : st.normal_stresses_Pa) n.push_back("peak_difference_at_" + kpa(s) + "kPa_kPa");
@@ -145,6 +151,10 @@ SimulatedCurve simulated_curve(const fs::path& run, double sigma) {
   SimulatedCurve c;
   c.normal_stress_Pa = sigma;
   c.consolidated_height_m = j.at("consolidated_height_m").get<double>();
+  if (j.contains("unload_reload")) {
+    c.unloading_modulus_Pa = j.at("unload_reload").at("unloading_modulus_Pa").get<double>();
+    c.reloading_modulus_Pa = j.at("unload_reload").at("reloading_modulus_Pa").get<double>();
+  }
   for (const auto& q : j.at("curve_strain_tau_dz")) {
     const double e = q[0].get<double>();
     if (!c.strain.empty() && !(e > c.strain.back())) continue; // keep the strains rising
@@ -167,6 +177,10 @@ void compare(const CalibrationStage& st, const fs::path& run, Evaluation& e) {
     }
     if (st.weights.height_kPa_per_um > 0)
       for (const CurveMisfit& m : per) e.parts.push_back(m.height_difference_m * 1e6);
+    if (st.curves.front().unloading_modulus_Pa > 0)
+      for (const CurveMisfit& m : per) e.parts.push_back(m.unloading_modulus_difference * 100);
+    if (st.curves.front().reloading_modulus_Pa > 0)
+      for (const CurveMisfit& m : per) e.parts.push_back(m.reloading_modulus_difference * 100);
     e.misfit = overall_misfit(per) / 1e3;
     break;
   }
@@ -498,6 +512,7 @@ int run_calibrate_command(const CalibrateCommandOptions& o) {
                            {"best_folder", best.folder},
                            {"evaluations", r.history.size()},
                            {"stop_reason", r.stop_reason},
+                           {"restarts", r.restarts},
                            {"wall_seconds_this_process", seconds_since(ts)}});
     fmt::print("stage {}: {} -> misfit {:.4g} {} at evaluation {} of {} ({})\n", st.name,
                values_text(st, best.values), best.misfit, st.misfit_unit(), best.index,

@@ -133,6 +133,14 @@ void run_one(const ShearScenario& sc, double sigma, int threads, const fs::path&
                         r.consolidation_steps, r.consolidated_normal_stress_Pa / 1000,
                         r.consolidated_height_m * 1e3, r.consolidated_porosity,
                         r.consolidated_coordination_number));
+      if (r.unload_reload.done)
+        log(fmt::format("unload-reload {:.1f} -> {:.1f} -> {:.1f} kPa in {} steps: constrained "
+                        "modulus {:.1f} MPa unloading, {:.1f} MPa reloading",
+                        r.unload_reload.loaded_normal_stress_Pa / 1000,
+                        r.unload_reload.unloaded_normal_stress_Pa / 1000,
+                        r.unload_reload.reloaded_normal_stress_Pa / 1000, r.unload_reload.steps,
+                        r.unload_reload.unloading_modulus_Pa() / 1e6,
+                        r.unload_reload.reloading_modulus_Pa() / 1e6));
     }
     const double dt = std::chrono::duration<double>(now - last).count();
     if (dt < progress_interval_s) return;
@@ -179,6 +187,18 @@ void run_one(const ShearScenario& sc, double sigma, int threads, const fs::path&
                       {"particle_steps_per_s", r.particle_steps_per_s},
                       {"resumed", r.resumed},
                       {"curve_strain_tau_dz", curve}};
+  if (r.unload_reload.done) {
+    const UnloadReload& u = r.unload_reload;
+    j["unload_reload"] = {{"loaded_height_m", u.loaded_height_m},
+                          {"loaded_normal_stress_Pa", u.loaded_normal_stress_Pa},
+                          {"unloaded_height_m", u.unloaded_height_m},
+                          {"unloaded_normal_stress_Pa", u.unloaded_normal_stress_Pa},
+                          {"reloaded_height_m", u.reloaded_height_m},
+                          {"reloaded_normal_stress_Pa", u.reloaded_normal_stress_Pa},
+                          {"steps", u.steps},
+                          {"unloading_modulus_Pa", u.unloading_modulus_Pa()},
+                          {"reloading_modulus_Pa", u.reloading_modulus_Pa()}};
+  }
   const fs::path tmp = out / (run_stem(sigma) + ".json.tmp");
   write_text(tmp, j.dump(1) + "\n");
   fs::rename(tmp, out / (run_stem(sigma) + ".json")); // the run is finished once this exists

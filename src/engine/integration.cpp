@@ -19,6 +19,7 @@ void World::integrate() {
   const std::size_t n = p_.size();
   const double dt = dt_;
   const double alpha = settings_.local_damping;
+  const bool damped = alpha != 0.0;
   auto& P = p_;
   double max_move2 = 0.0;
   std::uint32_t bad = UINT32_MAX;
@@ -42,10 +43,14 @@ void World::integrate() {
       P.force[i] = f;
       P.moment[i] = mo;
       // Central differences (PFC): v(t+dt/2) = v(t-dt/2) + (F + Fd)/m dt.
+      // Undamped runs (alpha = 0: the flowing workloads) skip the damping
+      // force, which is then zero: the same sums, bit for bit, for finite F.
       if (!(P.flags[i] & fix_translation))
-        P.velocity[i] += (f + local_damping_force(f, P.velocity[i], alpha)) * (dt / P.mass[i]);
+        P.velocity[i] +=
+            (damped ? f + local_damping_force(f, P.velocity[i], alpha) : f) * (dt / P.mass[i]);
       if (!(P.flags[i] & fix_rotation))
-        P.spin[i] += (mo + local_damping_force(mo, P.spin[i], alpha)) * (dt / P.inertia[i]);
+        P.spin[i] +=
+            (damped ? mo + local_damping_force(mo, P.spin[i], alpha) : mo) * (dt / P.inertia[i]);
       const Vec3 dx = P.velocity[i] * dt;
       P.position[i] += dx;
       P.displacement[i] += dx;

@@ -70,9 +70,22 @@ CurveMisfit curve_misfit(const MeasuredCurve& measured, const SimulatedCurve& si
   if (measured.consolidated_height_m > 0)
     m.height_difference_m = simulated.consolidated_height_m - measured.consolidated_height_m;
   const double dh_Pa = weights.height_kPa_per_um * (m.height_difference_m * 1e6) * 1e3;
+  // Moduli in kPa: (weight kPa/%) x (relative difference x 100 %) x 1000 Pa/kPa. A modulus
+  // measured but not simulated (no loop run) counts as -100 %.
+  auto relative = [](double simulated, double measured) {
+    return measured > 0 ? simulated / measured - 1.0 : 0.0;
+  };
+  m.unloading_modulus_difference =
+      relative(simulated.unloading_modulus_Pa, measured.unloading_modulus_Pa);
+  m.reloading_modulus_difference =
+      relative(simulated.reloading_modulus_Pa, measured.reloading_modulus_Pa);
+  const double du_Pa =
+      weights.modulus_kPa_per_percent * (m.unloading_modulus_difference * 100) * 1e3;
+  const double dr_Pa =
+      weights.modulus_kPa_per_percent * (m.reloading_modulus_difference * 100) * 1e3;
   m.total_Pa = std::sqrt(m.rms_shear_stress_Pa * m.rms_shear_stress_Pa +
                          weights.peak * m.peak_difference_Pa * m.peak_difference_Pa +
-                         dz_Pa * dz_Pa + dh_Pa * dh_Pa);
+                         dz_Pa * dz_Pa + dh_Pa * dh_Pa + du_Pa * du_Pa + dr_Pa * dr_Pa);
   return m;
 }
 
@@ -195,35 +208,65 @@ OptimiserResult run_optimiser(const std::vector<CalibrationParameter>& parameter
   const unsigned n = static_cast<unsigned>(parameters.size());
   if (n == 0) throw std::logic_error("run_optimiser: no parameter to fit");
   if (settings.budget < 1) throw std::logic_error("run_optimiser: budget < 1");
-  std::unique_ptr<std::remove_pointer_t<nlopt_opt>, OptDeleter> opt(
-      nlopt_create(NLOPT_LN_BOBYQA, n));
-  if (!opt) throw std::runtime_error("NLopt could not create its optimiser");
-  std::vector<double> lo(n, 0.0), hi(n, 1.0), step(n, settings.initial_step), u(n);
-  for (unsigned k = 0; k < n; ++k) {
+  std::vector<double> lo(n, 0.0), hi(n, 1.0), u(n);
+  for (unsigned k = 0; k < n; ++k)
     u[k] = std::clamp(to_unit(parameters[k], parameters[k].start), 0.0, 1.0);
-    // BOBYQA moves a start that lies closer to a bound than its first step:
-    // the step shrinks to 0.9 of that distance instead, down to 5 % of the
-    // range (a start closer than that to a bound is moved inward by NLopt).
-    const double room = std::min(u[k], 1.0 - u[k]);
-    if (room > 0) step[k] = std::min(settings.initial_step, std::max(0.9 * room, 0.05));
-  }
   LoopState s;
   s.parameters = &parameters;
   s.evaluate = &evaluate;
   s.recorded = &recorded;
   s.on_done = &on_done;
-  s.opt = opt.get();
   s.budget = settings.budget;
-  nlopt_set_lower_bounds(opt.get(), lo.data());
-  nlopt_set_upper_bounds(opt.get(), hi.data());
-  nlopt_set_initial_step(opt.get(), step.data());
-  nlopt_set_maxeval(opt.get(), settings.budget);
-  if (settings.tolerance > 0) nlopt_set_stopval(opt.get(), settings.tolerance);
-  nlopt_set_xtol_abs1(opt.get(), settings.unit_step_tolerance);
-  nlopt_set_min_objective(opt.get(), objective, &s);
-  double best = 0;
-  const nlopt_result rc = nlopt_optimize(opt.get(), u.data(), &best);
-  if (s.error) std::rethrow_exception(s.error);
+  // One BOBYQA run from u with what is left of the budget.
+  auto optimise = [&]() {
+    std::unique_ptr<std::remove_pointer_t<nlopt_opt>, OptDeleter> opt(
+        nlopt_create(NLOPT_LN_BOBYQA, n));
+    if (!opt) throw std::runtime_error("NLopt could not create its optimiser");
+    std::vector<double> step(n, settings.initial_step);
+    for (unsigned k = 0; k < n; ++k) {
+      // BOBYQA moves a start that lies closer to a bound than its first step:
+      // the step shrinks to 0.9 of that distance instead, down to 5 % of the
+      // range (a start closer than that to a bound is moved inward by NLopt).
+      const double room = std::min(u[k], 1.0 - u[k]);
+      if (room > 0) step[k] = std::min(settings.initial_step, std::max(0.9 * room, 0.05));
+    }
+    s.opt = opt.get();
+    nlopt_set_lower_bounds(opt.get(), lo.data());
+    nlopt_set_upper_bounds(opt.get(), hi.data());
+    nlopt_set_initial_step(opt.get(), step.data());
+    nlopt_set_maxeval(opt.get(), settings.budget - static_cast<int>(s.result.history.size()));
+    if (settings.tolerance > 0) nlopt_set_stopval(opt.get(), settings.tolerance);
+    nlopt_set_xtol_abs1(opt.get(), settings.unit_step_tolerance);
+    nlopt_set_min_objective(opt.get(), objective, &s);
+    double best = 0;
+    const nlopt_result rc = nlopt_optimize(opt.get(), u.data(), &best);
+    s.opt = nullptr;
+    if (s.error) std::rethrow_exception(s.error);
+    return rc;
+  };
+  auto converged = [](nlopt_result rc) {
+    return rc == NLOPT_XTOL_REACHED || rc == NLOPT_SUCCESS || rc == NLOPT_FTOL_REACHED ||
+           rc == NLOPT_ROUNDOFF_LIMITED;
+  };
+  // Restarts (Cartis, Fiala, Marteau and Roberts 2019, "Improving the
+  // flexibility and robustness of model-based derivative-free optimization
+  // solvers", ACM TOMS 45(3), the noisy-objective restarts of Py-BOBYQA): a
+  // noisy misfit can shrink the trust region around a point that is only
+  // luckier than its neighbours; with budget left, BOBYQA starts again from
+  // the best point so far with its first step. Deterministic, so a resumed
+  // calibration asks for the same points.
+  nlopt_result rc = optimise();
+  int restarts = 0;
+  while (converged(rc) && restarts < settings.restarts &&
+         static_cast<int>(s.result.history.size()) < settings.budget) {
+    std::size_t best = 0;
+    for (std::size_t k = 1; k < s.result.history.size(); ++k)
+      if (s.result.history[k].misfit < s.result.history[best].misfit) best = k;
+    for (unsigned k = 0; k < n; ++k)
+      u[k] = std::clamp(to_unit(parameters[k], s.result.history[best].values[k]), 0.0, 1.0);
+    ++restarts;
+    rc = optimise();
+  }
   OptimiserResult r = std::move(s.result);
   if (r.history.empty())
     throw std::runtime_error(
@@ -255,6 +298,8 @@ OptimiserResult run_optimiser(const std::vector<CalibrationParameter>& parameter
     r.stop_reason = fmt::format("NLopt stopped (code {})", static_cast<int>(rc));
     break;
   }
+  r.restarts = restarts;
+  if (restarts > 0) r.stop_reason += fmt::format(", after {} restart(s)", restarts);
   return r;
 }
 

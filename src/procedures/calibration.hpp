@@ -33,6 +33,10 @@ struct MeasuredCurve {
   // measured [m]. It sees the contact stiffness without the rolling
   // resistance, which the curves mix (docs/results/calibrate.md).
   double consolidated_height_m = 0;
+  // The constrained moduli of an unload-reload loop after consolidation
+  // (shear.unload_reload_fraction; docs/shear.md); 0 when not measured [Pa].
+  double unloading_modulus_Pa = 0;
+  double reloading_modulus_Pa = 0;
   std::string source; // the file, for messages
 };
 
@@ -43,13 +47,16 @@ struct SimulatedCurve {
   std::vector<double> shear_stress_Pa;         // [Pa]
   std::vector<double> vertical_displacement_m; // + dilation [m]
   double consolidated_height_m = 0;            // after consolidation [m]
+  double unloading_modulus_Pa = 0;             // of the unload-reload loop; 0: none run [Pa]
+  double reloading_modulus_Pa = 0;             // [Pa]
 };
 
 // Optional terms beside the shear stress RMS.
 struct CurveWeights {
-  double peak = 0;                // weight of the squared peak difference [-]
-  double dilation_kPa_per_mm = 0; // turns the vertical displacement RMS into kPa [kPa/mm]
-  double height_kPa_per_um = 0;   // turns the consolidated height difference into kPa [kPa/um]
+  double peak = 0;                    // weight of the squared peak difference [-]
+  double dilation_kPa_per_mm = 0;     // turns the vertical displacement RMS into kPa [kPa/mm]
+  double height_kPa_per_um = 0;       // turns the consolidated height difference into kPa [kPa/um]
+  double modulus_kPa_per_percent = 0; // turns a modulus's relative difference into kPa [kPa/%]
 };
 
 struct CurveMisfit {
@@ -58,8 +65,12 @@ struct CurveMisfit {
   double peak_difference_Pa = 0;          // simulated peak - measured peak
   double rms_vertical_displacement_m = 0; // 0 when not measured
   double height_difference_m = 0;         // consolidated height, simulated - measured (0: none)
-  double total_Pa = 0;                    // sqrt(rms^2 + w_p dpeak^2 + (w_d rms_dz)^2 + (w_h dh)^2)
-  std::size_t points = 0;                 // measured points compared
+  // The unload-reload moduli, simulated / measured - 1 (0: not measured) [-].
+  double unloading_modulus_difference = 0;
+  double reloading_modulus_difference = 0;
+  // sqrt(rms^2 + w_p dpeak^2 + (w_d rms_dz)^2 + (w_h dh)^2 + (w_m 100 dMu)^2 + (w_m 100 dMr)^2)
+  double total_Pa = 0;
+  std::size_t points = 0; // measured points compared
 };
 
 // The simulated series at x by linear interpolation; x must lie inside
@@ -125,12 +136,16 @@ struct OptimiserSettings {
   double tolerance = 0;              // stop once the misfit is at or below this (0: never early)
   double initial_step = 0.25;        // first trust-region radius, as a fraction of each range [-]
   double unit_step_tolerance = 1e-3; // stop when steps shrink below this fraction of a range [-]
+  // Restarts from the best point when BOBYQA converges with budget left (a
+  // noisy misfit; calibration.cpp) [-]
+  int restarts = 0;
 };
 
 struct OptimiserResult {
   std::vector<Evaluation> history; // every evaluation, replayed or new, in order
   std::size_t best = 0;            // index into history of the lowest misfit
   std::string stop_reason;         // for the summary
+  int restarts = 0;                // BOBYQA restarts from the best point
 };
 
 // Runs a simulation at `values` and returns its evaluation (index and values

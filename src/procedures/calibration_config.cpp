@@ -28,13 +28,20 @@ const Keys kStageKeys = {"name",
                          "parameters",
                          "target",
                          "budget",
+                         "restarts",
                          "tolerance",
                          "peak_weight",
                          "dilation_weight_kPa_per_mm",
-                         "height_weight_kPa_per_um"};
+                         "height_weight_kPa_per_um",
+                         "modulus_weight_kPa_per_percent"};
 const Keys kParameterKeys = {"key", "min", "max", "start", "scale"};
-const Keys kTargetKeys = {"curves", "friction_angle_deg", "cohesion_kPa", "peak_shear_stress_kPa",
-                          "consolidated_height_mm"};
+const Keys kTargetKeys = {"curves",
+                          "friction_angle_deg",
+                          "cohesion_kPa",
+                          "peak_shear_stress_kPa",
+                          "consolidated_height_mm",
+                          "unloading_modulus_MPa",
+                          "reloading_modulus_MPa"};
 const Keys kCurveFileKeys = {"file", "normal_stress_kPa"};
 
 std::string kpa(double Pa) {
@@ -160,7 +167,10 @@ std::vector<MeasuredCurve> read_measured_curves(const std::string& path, double 
       return same_pressure(c.normal_stress_Pa, sigma);
     });
     if (it == curves.end()) {
-      curves.push_back({sigma, {}, {}, {}, 0.0, path});
+      MeasuredCurve c;
+      c.normal_stress_Pa = sigma;
+      c.source = path;
+      curves.push_back(std::move(c));
       it = curves.end() - 1;
     }
     if (!it->strain.empty() && !(e > it->strain.back()))
@@ -255,6 +265,9 @@ void read_target(const toml::node& node, const std::string& P, CalibrationStage&
   const toml::node* heights = t.get("consolidated_height_mm");
   if (heights && !curves)
     fail(P + ".consolidated_height_mm", *heights, "only beside measured curves (target.curves)");
+  for (const char* k : {"unloading_modulus_MPa", "reloading_modulus_MPa"})
+    if (const toml::node* n = t.get(k); n && !curves)
+      fail(P + "." + k, *n, "only beside measured curves (target.curves)");
   if (mc) {
     st.kind = CalibrationTargetKind::mohr_coulomb;
     const toml::node* f = t.get("friction_angle_deg");
@@ -367,6 +380,29 @@ void read_target(const toml::node& node, const std::string& P, CalibrationStage&
       st.curves[k].consolidated_height_m = mm * 1e-3;
     }
   }
+  // The unload-reload moduli: one per pressure, and the scenario must run the loop.
+  for (const bool unloading : {true, false}) {
+    const std::string name = unloading ? "unloading_modulus_MPa" : "reloading_modulus_MPa";
+    const toml::node* n = t.get(name);
+    if (!n) continue;
+    const std::string mk = P + "." + name;
+    if (!(sc.test.unload_reload_fraction > 0))
+      fail(mk, *n,
+           "a modulus target only with an unload-reload loop in the scenario: "
+           "shear.unload_reload_fraction in (0, 1), e.g. 0.9 (docs/shear.md)");
+    const toml::array* a = n->as_array();
+    const std::string allowed = fmt::format(
+        "a list of {} constrained moduli [MPa] of the unload-reload loop, one per normal stress "
+        "of the stage, rising ({} kPa), each > 0",
+        st.curves.size(), pressures);
+    if (!a || a->size() != st.curves.size()) fail(mk, *n, allowed);
+    for (std::size_t k = 0; k < a->size(); ++k) {
+      const double MPa = tomlread::as_number((*a)[k], fmt::format("{}[{}]", mk, k), allowed);
+      if (!(MPa > 0)) fail(fmt::format("{}[{}]", mk, k), (*a)[k], allowed);
+      (unloading ? st.curves[k].unloading_modulus_Pa : st.curves[k].reloading_modulus_Pa) =
+          MPa * 1e6;
+    }
+  }
 }
 
 } // namespace
@@ -431,6 +467,11 @@ CalibrationScenario parse_calibration(std::string_view text, const std::string& 
             t, P, "budget", [](long v) { return v >= 1 && v <= 10000; },
             "a whole number of evaluations in [1, 10000]"))
       st.optimiser.budget = static_cast<int>(*b);
+    if (auto v = tomlread::opt_integer(
+            t, P, "restarts", [](long x) { return x >= 0 && x <= 100; },
+            "a whole number in [0, 100]: how often BOBYQA may start again from the best point "
+            "when it converges with budget left (noisy misfits)"))
+      st.optimiser.restarts = static_cast<int>(*v);
     if (auto v = tomlread::opt_number(
             t, P, "tolerance", [](double x) { return x >= 0; },
             ">= 0, in the misfit's unit (kPa; degrees and kPa for a "
@@ -445,6 +486,10 @@ CalibrationScenario parse_calibration(std::string_view text, const std::string& 
     if (auto v = tomlread::opt_number(
             t, P, "height_weight_kPa_per_um", [](double x) { return x >= 0; }, ">= 0 [kPa/um]"))
       st.weights.height_kPa_per_um = *v;
+    if (auto v = tomlread::opt_number(
+            t, P, "modulus_weight_kPa_per_percent", [](double x) { return x >= 0; },
+            ">= 0 [kPa/%]"))
+      st.weights.modulus_kPa_per_percent = *v;
     // The stage's scenario at the starts: checks `set` and every parameter key.
     ShearScenario sc;
     try {
@@ -481,6 +526,16 @@ CalibrationScenario parse_calibration(std::string_view text, const std::string& 
                        "measured consolidated heights and a weight > 0 for them go together: "
                        "target.consolidated_height_mm = [...] with height_weight_kPa_per_um "
                        "(e.g. 1: a micrometre counts as a kPa)");
+    const bool moduli =
+        st.kind == CalibrationTargetKind::curves &&
+        (st.curves.front().unloading_modulus_Pa > 0 || st.curves.front().reloading_modulus_Pa > 0);
+    if (moduli != (st.weights.modulus_kPa_per_percent > 0))
+      throw InputError(moduli ? P + ".modulus_weight_kPa_per_percent" : P + ".target",
+                       moduli ? "(not given)"
+                              : "(no unloading_modulus_MPa or reloading_modulus_MPa)",
+                       "measured unload-reload moduli and a weight > 0 for them go together: "
+                       "target.reloading_modulus_MPa = [...] with modulus_weight_kPa_per_percent "
+                       "(e.g. 0.5: a per cent counts as half a kPa)");
     for (const CalibrationParameter& p : st.parameters)
       earlier.push_back(parameter_override(p, p.start));
     c.stages.push_back(std::move(st));

@@ -57,6 +57,10 @@ void validate(const DirectShearSpec& s) {
           s.consolidation_stress_tolerance, "must be > 0");
   require(s.consolidation_max_steps > 0, "shear.consolidation_max_steps",
           static_cast<double>(s.consolidation_max_steps), "must be > 0");
+  require(s.unload_reload_fraction >= 0 && s.unload_reload_fraction < 1,
+          "shear.unload_reload_fraction", s.unload_reload_fraction,
+          "in [0, 1): 0 for no unload-reload loop, else the fraction of the normal stress the "
+          "loop unloads to [-]");
   require(s.record_interval_steps > 0, "shear.record_interval_steps",
           static_cast<double>(s.record_interval_steps), "must be > 0");
   validate(s.ball_wall, "shear.ball_wall");
@@ -97,14 +101,17 @@ namespace {
 
 // The test's progress, kept in the checkpoint's procedure blob.
 struct ShearProgressState {
-  int phase = 0;                     // 0: consolidation; 1: shearing
-  long consolidation_first_step = 0; // world step when consolidation cycling began
-  long fit_steps = 0;                // calm steps that fitted the specimen into the box
-  long shear_first_step = 0;         // world step when shearing began
-  long switch_step = -1;             // prepared specimens: world step when the material came in
-  double x0 = 0;                     // top wall x at the start of shearing [m]
-  double t_start = 0;                // world time at the start of shearing [s]
-  double sum_sigma = 0, sum_fx = 0;  // sums over the current record interval
+  int phase = 0;                       // 0: consolidation; 1: shearing
+  long consolidation_first_step = 0;   // world step when consolidation cycling began
+  long fit_steps = 0;                  // calm steps that fitted the specimen into the box
+  long shear_first_step = 0;           // world step when shearing began
+  long switch_step = -1;               // prepared specimens: world step when the material came in
+  int unload_reload_leg = 0;           // 0: not begun; 1: unloading; 2: reloading
+  long leg_first_step = -1;            // world step when the current unload-reload leg began
+  double shear_reference_height_m = 0; // height when shearing began [m]
+  double x0 = 0;                       // top wall x at the start of shearing [m]
+  double t_start = 0;                  // world time at the start of shearing [s]
+  double sum_sigma = 0, sum_fx = 0;    // sums over the current record interval
   long samples = 0;
   double wall_seconds = 0;                        // spent before the last resume [s]
   double particle_steps = 0, cycling_seconds = 0; // before the last resume
@@ -139,6 +146,14 @@ std::string save_state(const ShearProgressState& p, double wall_seconds_now,
               {"consolidated_porosity", r.consolidated_porosity},
               {"consolidated_coordination_number", r.consolidated_coordination_number},
               {"settling_steps", r.settling_steps},
+              {"unload_reload_leg", p.unload_reload_leg},
+              {"leg_first_step", p.leg_first_step},
+              {"shear_reference_height_m", p.shear_reference_height_m},
+              {"unload_reload",
+               {r.unload_reload.done, r.unload_reload.loaded_height_m,
+                r.unload_reload.loaded_normal_stress_Pa, r.unload_reload.unloaded_height_m,
+                r.unload_reload.unloaded_normal_stress_Pa, r.unload_reload.reloaded_height_m,
+                r.unload_reload.reloaded_normal_stress_Pa, r.unload_reload.steps}},
               {"peak_shear_stress_Pa", r.peak_shear_stress_Pa},
               {"peak_strain", r.peak_strain},
               {"worst_normal_stress_deviation", r.worst_normal_stress_deviation},
@@ -172,6 +187,23 @@ ShearProgressState load_state(const std::string& blob, const std::string& path) 
     r.consolidated_porosity = j.value("consolidated_porosity", 0.0); // absent before 2026-12
     r.consolidated_coordination_number = j.value("consolidated_coordination_number", 0.0);
     r.settling_steps = j.value("settling_steps", 0L);
+    // Absent before the unload-reload loop (2026-12-03): none, and shearing
+    // measured from the consolidated height.
+    p.unload_reload_leg = j.value("unload_reload_leg", 0);
+    p.leg_first_step = j.value("leg_first_step", -1L);
+    p.shear_reference_height_m = j.value("shear_reference_height_m", r.consolidated_height_m);
+    if (j.contains("unload_reload")) {
+      const json& u = j.at("unload_reload");
+      UnloadReload& ur = r.unload_reload;
+      ur.done = u.at(0);
+      ur.loaded_height_m = u.at(1);
+      ur.loaded_normal_stress_Pa = u.at(2);
+      ur.unloaded_height_m = u.at(3);
+      ur.unloaded_normal_stress_Pa = u.at(4);
+      ur.reloaded_height_m = u.at(5);
+      ur.reloaded_normal_stress_Pa = u.at(6);
+      ur.steps = u.at(7);
+    }
     r.peak_shear_stress_Pa = j.at("peak_shear_stress_Pa");
     r.peak_strain = j.at("peak_strain");
     r.worst_normal_stress_deviation = j.at("worst_normal_stress_deviation");
@@ -256,21 +288,41 @@ DirectShearResult run_direct_shear(World& w, const DirectShearSpec& s,
   if (pr.phase == 0) {
     const long fit_steps = pr.fit_steps;
     const bool prepared = s.ball_ball_during_consolidation.has_value();
-    // Consolidation, then (prepared specimens) settling with the material.
+    const bool loop = s.unload_reload_fraction > 0;
+    // The servo's target: the normal stress, or the loop's lowered one.
+    auto set_target = [&](double sigma_Pa) {
+      WallServo servo = w.walls()[bottom].servo;
+      servo.target_force_N = sigma_Pa * area;
+      servo.error_integral_N_s = 0;
+      w.set_wall_servo(bottom, servo);
+    };
+    auto record_consolidated = [&] {
+      r.settling_steps = pr.switch_step < 0 ? 0 : w.step_count() - pr.switch_step;
+      r.consolidated_height_m = height();
+      r.consolidated_porosity = porosity_now();
+      r.consolidated_coordination_number = w.measure().coordination_number;
+      r.consolidated_normal_stress_Pa = normal_stress();
+    };
+    // Consolidation, then (prepared specimens) settling with the material,
+    // then (optionally) the unload-reload loop's two legs.
     for (;;) {
       const long into = w.step_count() - pr.consolidation_first_step;
-      const bool out_of_steps = pr.switch_step < 0
-                                    ? fit_steps + into >= s.consolidation_max_steps
-                                    : w.step_count() - pr.switch_step >= s.consolidation_max_steps;
+      const double target = pr.unload_reload_leg == 1
+                                ? s.unload_reload_fraction * s.normal_stress_Pa
+                                : s.normal_stress_Pa;
+      const bool out_of_steps =
+          pr.unload_reload_leg > 0 ? w.step_count() - pr.leg_first_step >= s.consolidation_max_steps
+          : pr.switch_step < 0     ? fit_steps + into >= s.consolidation_max_steps
+                                   : w.step_count() - pr.switch_step >= s.consolidation_max_steps;
       bool done = out_of_steps;
       if (!out_of_steps) {
         cyc.advance(check - into % check);
-        r.consolidation_steps = fit_steps + (w.step_count() - pr.consolidation_first_step);
+        const long so_far = fit_steps + (w.step_count() - pr.consolidation_first_step);
+        if (pr.unload_reload_leg == 0) r.consolidation_steps = so_far;
         const double sigma = normal_stress();
-        const double err = std::abs(sigma - s.normal_stress_Pa) / s.normal_stress_Pa;
+        const double err = std::abs(sigma - target) / target;
         const double ratio = w.mean_unbalanced_force_ratio();
-        if (ck.consolidation_progress)
-          ck.consolidation_progress({r.consolidation_steps, sigma, ratio});
+        if (ck.consolidation_progress) ck.consolidation_progress({so_far, sigma, ratio});
         done = err < s.consolidation_stress_tolerance && ratio < s.consolidation_ratio;
       }
       if (done && prepared && pr.switch_step < 0) {
@@ -284,15 +336,35 @@ DirectShearResult run_direct_shear(World& w, const DirectShearSpec& s,
         w.set_wall_servo(bottom, servo);
         pr.switch_step = w.step_count();
         done = false;
+      } else if (done && loop && pr.unload_reload_leg < 2) {
+        UnloadReload& ur = r.unload_reload;
+        if (pr.unload_reload_leg == 0) { // consolidated: unload
+          record_consolidated();
+          ur.loaded_height_m = r.consolidated_height_m;
+          ur.loaded_normal_stress_Pa = r.consolidated_normal_stress_Pa;
+          set_target(s.unload_reload_fraction * s.normal_stress_Pa);
+        } else { // unloaded: reload
+          ur.unloaded_height_m = height();
+          ur.unloaded_normal_stress_Pa = normal_stress();
+          set_target(s.normal_stress_Pa);
+        }
+        ++pr.unload_reload_leg;
+        pr.leg_first_step = w.step_count();
+        done = false;
       }
       if (done) break;
       cyc.at_check();
     }
-    r.settling_steps = pr.switch_step < 0 ? 0 : w.step_count() - pr.switch_step;
-    r.consolidated_height_m = height();
-    r.consolidated_porosity = porosity_now();
-    r.consolidated_coordination_number = w.measure().coordination_number;
-    r.consolidated_normal_stress_Pa = normal_stress();
+    if (loop) {
+      UnloadReload& ur = r.unload_reload;
+      ur.reloaded_height_m = height();
+      ur.reloaded_normal_stress_Pa = normal_stress();
+      ur.steps = w.step_count() - pr.consolidation_first_step - (r.consolidation_steps - fit_steps);
+      ur.done = true;
+    } else {
+      record_consolidated();
+    }
+    pr.shear_reference_height_m = height();
     // Shearing: contact defaults for new contacts (paper: no adhesion for
     // contacts made while shearing), then the upper box moves in -x.
     if (s.ball_ball_during_shear) w.set_ball_ball_defaults(*s.ball_ball_during_shear);
@@ -325,7 +397,7 @@ DirectShearResult run_direct_shear(World& w, const DirectShearSpec& s,
     p.shear_strain = p.shear_displacement_m / strain_base;
     p.shear_stress_Pa = pr.sum_fx / static_cast<double>(pr.samples) / area;
     p.normal_stress_Pa = pr.sum_sigma / static_cast<double>(pr.samples);
-    p.vertical_displacement_m = height() - r.consolidated_height_m;
+    p.vertical_displacement_m = height() - pr.shear_reference_height_m;
     const double zb = w.walls()[bottom].point.z, zt = w.walls()[top].point.z;
     p.porosity = w.measure_region(Box{{0, 0, zb}, {s.box.length_m, s.box.width_m, zt}}).porosity;
     pr.sum_sigma = pr.sum_fx = 0;
@@ -372,6 +444,16 @@ DirectShearResult run_direct_shear(World& w, const DirectShearSpec& s,
     std::filesystem::remove(ck.path, ec); // finished: the result is the record
   }
   return r;
+}
+
+double UnloadReload::unloading_modulus_Pa() const {
+  const double strain = (unloaded_height_m - loaded_height_m) / loaded_height_m;
+  return strain > 0 ? (loaded_normal_stress_Pa - unloaded_normal_stress_Pa) / strain : 0.0;
+}
+
+double UnloadReload::reloading_modulus_Pa() const {
+  const double strain = (unloaded_height_m - reloaded_height_m) / unloaded_height_m;
+  return strain > 0 ? (reloaded_normal_stress_Pa - unloaded_normal_stress_Pa) / strain : 0.0;
 }
 
 MohrCoulombFit fit_mohr_coulomb(const std::vector<double>& sigma, const std::vector<double>& tau) {

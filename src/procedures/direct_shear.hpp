@@ -54,6 +54,11 @@ struct DirectShearSpec {
   double consolidation_ratio = 1e-3;     // mean unbalanced-force ratio to end consolidation [-]
   double consolidation_stress_tolerance = 0.01; // and |sigma - target| / target below this [-]
   long consolidation_max_steps = 400'000;
+  // An unload-reload loop after consolidation (an oedometer's elastic branch;
+  // docs/shear.md "Unload-reload"): when in (0, 1), the servo lowers the
+  // normal stress to this fraction of the target and raises it back, each
+  // leg ending on the consolidation criteria, before shearing. 0: none [-].
+  double unload_reload_fraction = 0.0;
   long record_interval_steps = 1000; // steps between curve points
 };
 
@@ -68,6 +73,23 @@ struct ShearPoint {
   double porosity = 0;                // centre-based, inside the box
 };
 
+// The unload-reload loop's three states (heights between the walls, bottom-
+// wall stresses) and its constrained moduli. With linear contacts the
+// unloading branch is nearly elastic, so its modulus scales with the contact
+// stiffness, which the consolidated height and the shear curves hardly see
+// (docs/results/calibrate.md).
+struct UnloadReload {
+  bool done = false;
+  double loaded_height_m = 0, loaded_normal_stress_Pa = 0;     // consolidated, before unloading
+  double unloaded_height_m = 0, unloaded_normal_stress_Pa = 0; // at the lowered stress
+  double reloaded_height_m = 0, reloaded_normal_stress_Pa = 0; // back at the target
+  long steps = 0;                                              // both legs [-]
+  // Unloading: (sigma_loaded - sigma_unloaded) / ((h_unloaded - h_loaded) / h_loaded) [Pa].
+  double unloading_modulus_Pa() const;
+  // Reloading: (sigma_reloaded - sigma_unloaded) / ((h_unloaded - h_reloaded) / h_unloaded) [Pa].
+  double reloading_modulus_Pa() const;
+};
+
 struct DirectShearResult {
   double target_normal_stress_Pa = 0;
   long consolidation_steps = 0;
@@ -78,6 +100,7 @@ struct DirectShearResult {
   // Prepared specimens: steps to settle with the material after the packing
   // (included in consolidation_steps) [-]
   long settling_steps = 0;
+  UnloadReload unload_reload; // when DirectShearSpec::unload_reload_fraction > 0
   std::vector<ShearPoint> curve;
   double peak_shear_stress_Pa = 0;
   double peak_strain = 0;
@@ -91,8 +114,9 @@ struct DirectShearResult {
 
 using ShearProgress = std::function<void(const ShearPoint&, const DirectShearResult&)>;
 
-// Consolidation, at each check: steps so far, bottom-wall stress [Pa] and the
-// mean unbalanced-force ratio [-].
+// Consolidation (and the unload-reload loop's legs), at each check: steps so
+// far since consolidation began, bottom-wall stress [Pa] and the mean
+// unbalanced-force ratio [-].
 struct ConsolidationState {
   long steps = 0;
   double normal_stress_Pa = 0;

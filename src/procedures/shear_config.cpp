@@ -49,6 +49,7 @@ const Keys kShearKeys = {"box",
                          "consolidation_ratio",
                          "consolidation_stress_tolerance",
                          "consolidation_max_steps",
+                         "unload_reload_fraction",
                          "record_interval_steps",
                          "local_damping",
                          "g_level",
@@ -253,6 +254,11 @@ ShearScenario parse_shear_scenario(std::string_view text, const std::string& sou
   if (auto v = opt_number(t, P, "consolidation_stress_tolerance", positive,
                           "|sigma - target| / target that ends consolidation: > 0 [-]"))
     s.consolidation_stress_tolerance = *v;
+  if (auto v = opt_number(
+          t, P, "unload_reload_fraction", [](double x) { return x >= 0 && x < 1; },
+          "in [0, 1): 0 for no unload-reload loop after consolidation, else the fraction of the "
+          "normal stress it unloads to [-]"))
+    s.unload_reload_fraction = *v;
   auto pos_int = [](long v) { return v > 0; };
   if (auto v = opt_integer(t, P, "consolidation_max_steps", pos_int, "a step limit > 0"))
     s.consolidation_max_steps = *v;
@@ -317,6 +323,7 @@ std::string resolved_shear_toml(const ShearScenario& sc) {
                      num(s.consolidation_ratio), s.consolidation_max_steps);
   o += fmt::format("consolidation_stress_tolerance = {}\nrecord_interval_steps = {}\n",
                    num(s.consolidation_stress_tolerance), s.record_interval_steps);
+  o += fmt::format("unload_reload_fraction = {}\n", num(s.unload_reload_fraction));
   o += fmt::format("local_damping = {}\ng_level = {}\nthreads = {}\n", num(sc.local_damping),
                    num(sc.g_level), sc.threads);
   o += fmt::format("checkpoint_interval_min = {}\n", num(sc.checkpoint_interval_min));

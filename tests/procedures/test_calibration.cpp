@@ -75,6 +75,26 @@ TEST(CalibrationMisfit, CurveAgainstHandComputedValues) {
   EXPECT_NEAR(height.total_Pa, 5e3, 1e-6);
   EXPECT_NEAR(curve_misfit(m, sh, {1.0, 0.0, 1.0}).total_Pa, 4e3, 1e-9);
 
+  // Unload-reload moduli: simulated 42 and 45 MPa against 40 and 50 measured,
+  // +5 % and -10 %; at 0.5 kPa/% that is 2.5 and 5 kPa, and the total
+  // sqrt(12 + 4 + 6.25 + 25) kPa. A measured modulus the run did not give
+  // (no loop: 0) counts as -100 %, 50 kPa; none measured: no term.
+  MeasuredCurve mm = m;
+  mm.unloading_modulus_Pa = 40e6;
+  mm.reloading_modulus_Pa = 50e6;
+  SimulatedCurve sm = s;
+  sm.unloading_modulus_Pa = 42e6;
+  sm.reloading_modulus_Pa = 45e6;
+  const CurveWeights wm{1.0, 0.0, 0.0, 0.5};
+  const CurveMisfit moduli = curve_misfit(mm, sm, wm);
+  EXPECT_NEAR(moduli.unloading_modulus_difference, 0.05, 1e-12);
+  EXPECT_NEAR(moduli.reloading_modulus_difference, -0.10, 1e-12);
+  EXPECT_NEAR(moduli.total_Pa, std::sqrt(12.0 + 4.0 + 6.25 + 25.0) * 1e3, 1e-6);
+  MeasuredCurve mu = m;
+  mu.unloading_modulus_Pa = 40e6;
+  EXPECT_NEAR(curve_misfit(mu, s, wm).total_Pa, std::sqrt(12.0 + 4.0 + 2500.0) * 1e3, 1e-6);
+  EXPECT_NEAR(curve_misfit(m, sm, wm).total_Pa, 4e3, 1e-9);
+
   // Two pressures with totals 3 and 4 kPa: sqrt((9 + 16) / 2) kPa.
   CurveMisfit a, b;
   a.total_Pa = 3e3;
@@ -165,6 +185,44 @@ TEST(CalibrationOptimiser, StopsAtTheToleranceOrTheBudget) {
   EXPECT_EQ(calls, 7);
   EXPECT_EQ(budget.history.size(), 7u);
   EXPECT_NE(budget.stop_reason.find("budget"), std::string::npos) << budget.stop_reason;
+}
+
+// Restarts: on the bowl BOBYQA converges well inside a budget of 60; allowed
+// two restarts it starts again from the best point so far (its first new
+// evaluation is that point) with its first step, twice, and says so; a resume
+// replays the same points.
+TEST(CalibrationOptimiser, RestartsFromTheBestPointWhenItConvergesWithBudgetLeft) {
+  OptimiserSettings s;
+  s.budget = 60;
+  const OptimiserResult once = run_optimiser(recovery_parameters(), s, evaluate_bowl);
+  ASSERT_LT(once.history.size(), 30u) << once.stop_reason;
+  EXPECT_EQ(once.restarts, 0);
+  s.restarts = 2;
+  const OptimiserResult r = run_optimiser(recovery_parameters(), s, evaluate_bowl);
+  EXPECT_EQ(r.restarts, 2);
+  EXPECT_NE(r.stop_reason.find("after 2 restart(s)"), std::string::npos) << r.stop_reason;
+  ASSERT_GT(r.history.size(), once.history.size());
+  EXPECT_LE(r.history.size(), 60u);
+  // The first run is the same; the next evaluation is its best point again.
+  const std::size_t k = once.history.size();
+  for (std::size_t i = 0; i < k; ++i) EXPECT_EQ(r.history[i].values, once.history[i].values);
+  EXPECT_EQ(r.history[k].values, once.history[once.best].values);
+  EXPECT_LE(r.history[r.best].misfit, once.history[once.best].misfit);
+  // Resumed from its first 20 evaluations (past the first restart): the same
+  // points, and the evaluator called only for the rest.
+  const std::vector<Evaluation> recorded(r.history.begin(), r.history.begin() + 20);
+  int calls = 0;
+  const OptimiserResult resumed = run_optimiser(
+      recovery_parameters(), s,
+      [&](int i, const std::vector<double>& v) {
+        ++calls;
+        return evaluate_bowl(i, v);
+      },
+      recorded);
+  ASSERT_EQ(resumed.history.size(), r.history.size());
+  for (std::size_t i = 0; i < r.history.size(); ++i)
+    EXPECT_EQ(resumed.history[i].values, r.history[i].values) << i;
+  EXPECT_EQ(calls, static_cast<int>(r.history.size()) - 20);
 }
 
 TEST(CalibrationOptimiser, OneParameterIsALineSearch) {
@@ -371,6 +429,35 @@ TEST_F(CalibrationConfig, BadParametersAreNamedByKey) {
   EXPECT_NE(e.find("consolidated_height_mm"), std::string::npos) << e;
   e = error_of("target = { peak_shear_stress_kPa = [30, 90], consolidated_height_mm = [2.9, 2.8] "
                "}\n" +
+               kGoodParameters);
+  EXPECT_NE(e.find("only beside measured curves"), std::string::npos) << e;
+}
+
+// Unload-reload moduli: one per pressure, positive, with their weight, and only
+// when the scenario runs the loop (shear.unload_reload_fraction).
+TEST_F(CalibrationConfig, UnloadReloadModuliNeedTheLoopAndAWeight) {
+  const std::string loop = "set = [\"shear.unload_reload_fraction = 0.9\"]\n";
+  const std::string weight = "modulus_weight_kPa_per_percent = 0.5\n";
+  const std::string curves = "target = { curves = [\"both.csv\"], reloading_modulus_MPa = ";
+  const CalibrationScenario c = parse(loop + curves + "[30, 45] }\n" + weight + kGoodParameters);
+  EXPECT_DOUBLE_EQ(c.stages[0].curves[0].reloading_modulus_Pa, 30e6);
+  EXPECT_DOUBLE_EQ(c.stages[0].curves[1].reloading_modulus_Pa, 45e6);
+  EXPECT_DOUBLE_EQ(c.stages[0].curves[1].unloading_modulus_Pa, 0.0);
+  EXPECT_DOUBLE_EQ(c.stages[0].weights.modulus_kPa_per_percent, 0.5);
+  std::string e = error_of(curves + "[30, 45] }\n" + weight + kGoodParameters);
+  EXPECT_NE(e.find("calibrate.stage[1].target.reloading_modulus_MPa"), std::string::npos) << e;
+  EXPECT_NE(e.find("shear.unload_reload_fraction"), std::string::npos) << e;
+  e = error_of(loop + curves + "[30] }\n" + weight + kGoodParameters);
+  EXPECT_NE(e.find("one per normal stress"), std::string::npos) << e;
+  e = error_of(loop + curves + "[30, -1] }\n" + weight + kGoodParameters);
+  EXPECT_NE(e.find("reloading_modulus_MPa[1]"), std::string::npos) << e;
+  e = error_of(loop + curves + "[30, 45] }\n" + kGoodParameters);
+  EXPECT_NE(e.find("calibrate.stage[1].modulus_weight_kPa_per_percent"), std::string::npos) << e;
+  e = error_of(loop + "target = { curves = [\"both.csv\"] }\n" + weight + kGoodParameters);
+  EXPECT_NE(e.find("unloading_modulus_MPa or reloading_modulus_MPa"), std::string::npos) << e;
+  e = error_of(loop +
+               "target = { peak_shear_stress_kPa = [30, 90], unloading_modulus_MPa = "
+               "[30, 45] }\n" +
                kGoodParameters);
   EXPECT_NE(e.find("only beside measured curves"), std::string::npos) << e;
 }

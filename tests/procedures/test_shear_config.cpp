@@ -96,6 +96,7 @@ servo_integral_time_s = 3e-4
 consolidation_ratio = 2e-3
 consolidation_stress_tolerance = 0.02
 consolidation_max_steps = 1000
+unload_reload_fraction = 0.8
 record_interval_steps = 250
 local_damping = 0.5
 g_level = 2
@@ -116,6 +117,7 @@ threads = 2
   EXPECT_DOUBLE_EQ(s.test.consolidation_ratio, 2e-3);
   EXPECT_DOUBLE_EQ(s.test.consolidation_stress_tolerance, 0.02);
   EXPECT_EQ(s.test.consolidation_max_steps, 1000);
+  EXPECT_DOUBLE_EQ(s.test.unload_reload_fraction, 0.8);
   EXPECT_EQ(s.test.record_interval_steps, 250);
   EXPECT_DOUBLE_EQ(s.local_damping, 0.5);
   EXPECT_DOUBLE_EQ(s.g_level, 2.0);
@@ -162,6 +164,7 @@ TEST(ShearConfig, ResolvedTomlReadsBackTheSame) {
   const ShearScenario a = parse(scenario(R"(
 normal_stresses_Pa = [50e3, 100e3]
 strain = "length"
+unload_reload_fraction = 0.75
 during_shear = { attraction_force_N = 0.0, friction = 0.4 }
 [preparation]
 during_compaction = { friction = 0.05 }
@@ -176,6 +179,7 @@ during_compaction = { friction = 0.05 }
   EXPECT_EQ(a.test.strain, b.test.strain);
   EXPECT_DOUBLE_EQ(a.test.max_shear_displacement_m, b.test.max_shear_displacement_m);
   EXPECT_DOUBLE_EQ(a.test.shear_rate_m_per_s, b.test.shear_rate_m_per_s);
+  EXPECT_DOUBLE_EQ(a.test.unload_reload_fraction, b.test.unload_reload_fraction);
   EXPECT_EQ(resolved_shear_toml(a), resolved_shear_toml(b));
 }
 
@@ -237,6 +241,8 @@ TEST(ShearConfig, WrongTypesAndRangesAreRejected) {
                "shear.consolidation_ratio");
   EXPECT_ERROR(scenario("normal_stresses_Pa = [40e3]\nconsolidation_max_steps = 1.5\n"),
                "shear.consolidation_max_steps = 1.5: expected a whole number");
+  EXPECT_ERROR(scenario("normal_stresses_Pa = [40e3]\nunload_reload_fraction = 1.0\n"),
+               "shear.unload_reload_fraction");
   EXPECT_ERROR(scenario("normal_stresses_Pa = [40e3]\nrecord_interval_steps = 0\n"),
                "shear.record_interval_steps");
   EXPECT_ERROR(scenario("normal_stresses_Pa = [40e3]\nlocal_damping = 1.0\n"),
