@@ -195,6 +195,14 @@ double objective(unsigned n, const double* u, double* /*gradient: none*/, void* 
   }
 }
 
+// The index of the lowest misfit (the first of equals); history not empty.
+std::size_t best_index(const std::vector<Evaluation>& history) {
+  std::size_t best = 0;
+  for (std::size_t k = 1; k < history.size(); ++k)
+    if (history[k].misfit < history[best].misfit) best = k;
+  return best;
+}
+
 struct OptDeleter {
   void operator()(nlopt_opt o) const { nlopt_destroy(o); }
 };
@@ -259,9 +267,7 @@ OptimiserResult run_optimiser(const std::vector<CalibrationParameter>& parameter
   int restarts = 0;
   while (converged(rc) && restarts < settings.restarts &&
          static_cast<int>(s.result.history.size()) < settings.budget) {
-    std::size_t best = 0;
-    for (std::size_t k = 1; k < s.result.history.size(); ++k)
-      if (s.result.history[k].misfit < s.result.history[best].misfit) best = k;
+    const std::size_t best = best_index(s.result.history);
     for (unsigned k = 0; k < n; ++k)
       u[k] = std::clamp(to_unit(parameters[k], s.result.history[best].values[k]), 0.0, 1.0);
     ++restarts;
@@ -271,9 +277,7 @@ OptimiserResult run_optimiser(const std::vector<CalibrationParameter>& parameter
   if (r.history.empty())
     throw std::runtime_error(
         fmt::format("NLopt stopped before evaluating anything (code {})", static_cast<int>(rc)));
-  r.best = 0;
-  for (std::size_t k = 1; k < r.history.size(); ++k)
-    if (r.history[k].misfit < r.history[r.best].misfit) r.best = k;
+  r.best = best_index(r.history);
   switch (rc) {
   case NLOPT_STOPVAL_REACHED:
     r.stop_reason = fmt::format("the misfit reached the tolerance ({:g})", settings.tolerance);
