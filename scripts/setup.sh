@@ -11,7 +11,7 @@ set -euo pipefail
 packages=(
   build-essential cmake g++ pkg-config
   libtomlplusplus-dev libcli11-dev libfmt-dev nlohmann-json3-dev libnlopt-cxx-dev
-  libcairo2-dev libeigen3-dev zlib1g-dev
+  libcairo2-dev libeigen3-dev zlib1g-dev libxsimd-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   clang-format
   python3-vtk9 # VTK's own reader checks the ParaView files in a test (/usr/bin/python3)

@@ -1,11 +1,26 @@
 // The contact pass: for each particle row, the forces and moments of its
 // ball-ball (j > i) and ball-wall contacts from the contact law
 // (physics/contact_law.hpp), the body force, and the instability guard.
+//
+// Ball-ball contacts go through the law in SIMD batches (ContactLanes: 8
+// contacts at once with AVX-512). Each thread walks its block of rows in
+// three passes over a small stage of contacts:
+//   1. find: for each neighbour entry, the distance; contacts born or ended;
+//      the touching ones copied into the stage (structure of arrays);
+//   2. law: the stage in batches of one property set, lane by lane the same
+//      IEEE operations as the scalar law (physics/lanes.hpp);
+//   3. apply: per row, in entry order, the results summed onto the row's
+//      particle and stored in the entries, then its ball-wall contacts.
+// The sums are made in the same order as a single scalar pass would make
+// them, so the bits do not depend on the batching or the thread count.
 #include "engine/thread_count.hpp"
 #include "engine/world.hpp"
 
+#include "physics/lanes.hpp"
+
 #include <algorithm>
 #include <cmath>
+#include <omp.h>
 
 namespace centridem {
 
@@ -25,6 +40,133 @@ void World::compute_contacts() {
   return band_props_[height_band(z_m, band_z0_, band_height_,
                                  static_cast<int>(band_props_.size()))];
 }
+
+namespace {
+
+constexpr std::size_t kLanes = ContactLanes::size;
+// Contacts staged per flush: small enough that the stage (256 bytes per
+// contact, 35 KB in all) stays in a 48 KB first-level cache.
+constexpr std::uint32_t kStage = 128;
+
+// The touching ball-ball contacts of a few consecutive rows, structure of
+// arrays, padded to whole batches. Inputs are copied in by the find pass;
+// the law overwrites the state and fills the results.
+struct ContactStage {
+  static constexpr std::size_t kCap = kStage + kLanes;
+  std::uint32_t count = 0;
+  alignas(64) std::uint32_t entry[kCap];
+  alignas(64) std::uint16_t props[kCap];
+  // Inputs: centre-to-centre vector [m] and its length [m]; radii [m];
+  // masses [kg]; v_j - v_i [m/s]; spins [rad/s].
+  alignas(64) double dx[kCap], dy[kCap], dz[kCap], dist[kCap];
+  alignas(64) double r1[kCap], r2[kCap], m1[kCap], m2[kCap];
+  alignas(64) double vx[kCap], vy[kCap], vz[kCap];
+  alignas(64) double w1x[kCap], w1y[kCap], w1z[kCap], w2x[kCap], w2y[kCap], w2z[kCap];
+  // State in, new state out: shear force [N] and rolling moment [N m] on end 2.
+  alignas(64) double fsx[kCap], fsy[kCap], fsz[kCap], mrx[kCap], mry[kCap], mrz[kCap];
+  // Results: force on end 2 [N]; total moment on end 2 [N m]; what end 1's
+  // moment loses, a1 (n x F) + M [N m].
+  alignas(64) double fx[kCap], fy[kCap], fz[kCap], m2x[kCap], m2y[kCap], m2z[kCap];
+  alignas(64) double m1x[kCap], m1y[kCap], m1z[kCap];
+
+  template <class T> static void put(double* a, double* b, double* c, std::uint32_t k, const T& v) {
+    a[k] = v.x, b[k] = v.y, c[k] = v.z;
+  }
+};
+
+using LaneV = LaneVec<ContactLanes>;
+using LaneM = LaneMask<ContactLanes>;
+
+inline ContactLanes stage_load(const double* a, std::uint32_t k) {
+  return ContactLanes::load_aligned(a + k);
+}
+inline LaneV stage_load(const double* a, const double* b, const double* c, std::uint32_t k) {
+  return {stage_load(a, k), stage_load(b, k), stage_load(c, k)};
+}
+// Store lanes k .. k + kLanes - 1; with a mask, only the lanes it holds.
+inline void stage_store(double* a, std::uint32_t k, const ContactLanes& v, const LaneM* only) {
+  (only ? select(*only, v, stage_load(a, k)) : v).store_aligned(a + k);
+}
+inline void stage_store(double* a, double* b, double* c, std::uint32_t k, const LaneV& v,
+                        const LaneM* only) {
+  stage_store(a, k, v.x, only), stage_store(b, k, v.y, only), stage_store(c, k, v.z, only);
+}
+
+// The law for the batch of stage indices k .. k + kLanes - 1 under
+// properties cp; with a mask, only the lanes it holds are stored. The
+// geometry is formed exactly as a scalar pass would form it.
+void stage_law(ContactStage& s, std::uint32_t k, const ContactProperties& cp, double dt,
+               const LaneM* only = nullptr) {
+  using T = ContactLanes;
+  const T dist = stage_load(s.dist, k);
+  const T r1 = stage_load(s.r1, k), r2 = stage_load(s.r2, k);
+  const LaneV nrm = stage_load(s.dx, s.dy, s.dz, k) * (T(1.0) / dist);
+  const T overlap = r1 + r2 - dist;
+  // Lever arms from the centres to the contact point: a1 n and -a2 n [m].
+  // With them, the relative velocity at the contact point
+  // (v_j + w_j x (-a2 n)) - (v_i + w_i x a1 n) is (v_j - v_i) - (a1 w_i + a2 w_j) x n,
+  // and the moments of a force F about the centres are a1 (n x F) on i and
+  // -a2 (n x F) on j: one cross product each instead of two.
+  const T a1 = r1 - T(0.5) * overlap, a2 = r2 - T(0.5) * overlap;
+  const LaneV w1 = stage_load(s.w1x, s.w1y, s.w1z, k);
+  const LaneV w2 = stage_load(s.w2x, s.w2y, s.w2z, k);
+  T mc(0.0);
+  if (has_dashpot(cp)) {
+    const T m1 = stage_load(s.m1, k), m2 = stage_load(s.m2, k);
+    mc = m1 * m2 / (m1 + m2);
+  }
+  const ContactGeometryT<T> g{nrm,
+                              overlap,
+                              stage_load(s.vx, s.vy, s.vz, k) - cross(a1 * w1 + a2 * w2, nrm),
+                              w2 - w1,
+                              lane_min(r1, r2),
+                              r1 + r2,
+                              r1 * r2 / (r1 + r2),
+                              mc};
+  ContactStateT<T> state{stage_load(s.fsx, s.fsy, s.fsz, k), stage_load(s.mrx, s.mry, s.mrz, k)};
+  const ContactResultT<T> res = contact_law(cp, g, state, dt);
+  const LaneV nxf = cross(nrm, res.force);
+  stage_store(s.fsx, s.fsy, s.fsz, k, state.shear_force, only);
+  stage_store(s.mrx, s.mry, s.mrz, k, state.rolling_moment, only);
+  stage_store(s.fx, s.fy, s.fz, k, res.force, only);
+  stage_store(s.m2x, s.m2y, s.m2z, k, res.moment - a2 * nxf, only);
+  stage_store(s.m1x, s.m1y, s.m1z, k, a1 * nxf + res.moment, only);
+}
+
+// The law for the whole stage, in batches of kLanes; the last is padded with
+// copies of the last contact (results unused). A batch whose contacts have
+// several property sets (graded defaults, properties changed between stages)
+// runs once per set, each run storing only its own lanes: a lane reads only
+// its own inputs, so the lanes a run does not store do not matter.
+void stage_law_all(ContactStage& s, const ContactProperties* props, double dt) {
+  const std::uint32_t n = s.count;
+  if (n == 0) return;
+  const std::uint32_t padded = static_cast<std::uint32_t>((n + kLanes - 1) / kLanes * kLanes);
+  for (std::uint32_t k = n; k < padded; ++k) {
+    s.props[k] = s.props[n - 1];
+    for (double* a :
+         {s.dx,  s.dy,  s.dz,  s.dist, s.r1,  s.r2,  s.m1,  s.m2,  s.vx,  s.vy,  s.vz, s.w1x,
+          s.w1y, s.w1z, s.w2x, s.w2y,  s.w2z, s.fsx, s.fsy, s.fsz, s.mrx, s.mry, s.mrz})
+      a[k] = a[n - 1];
+  }
+  for (std::uint32_t k0 = 0; k0 < padded; k0 += kLanes) {
+    const std::uint16_t* pr = s.props + k0;
+    if (std::all_of(pr + 1, pr + kLanes, [&](std::uint16_t p) { return p == pr[0]; })) {
+      stage_law(s, k0, props[pr[0]], dt);
+      continue;
+    }
+    alignas(64) double id[kLanes];
+    for (std::size_t l = 0; l < kLanes; ++l) id[l] = pr[l];
+    const ContactLanes ids = ContactLanes::load_aligned(id);
+    for (std::size_t l = 0; l < kLanes; ++l) {
+      if (std::find(pr, pr + l, pr[l]) != pr + l) continue; // this set has run
+      const LaneM mine = ids == ContactLanes(id[l]);
+      stage_law(s, k0, props[pr[l]], dt, &mine);
+    }
+  }
+}
+
+} // namespace
 
 template <bool Periodic> void World::compute_contacts_impl() {
   const std::size_t n = p_.size();
@@ -50,99 +192,162 @@ template <bool Periodic> void World::compute_contacts_impl() {
   const double max_overlap = settings_.max_overlap_fraction;
   std::uint32_t unstable = UINT32_MAX;
 
-  // Each row i is handled by one thread: it computes the contacts (i, j > i)
-  // and its ball-wall contacts, sums its own side in registers and leaves the
-  // force and moment on j in the entry; integrate() gathers those in a fixed
-  // order. No two threads write the same memory, and sums do not depend on
-  // the thread count. Each thread takes one contiguous block of rows: the
-  // particles are in cell order, so most neighbours j of a row i lie in the
-  // same block and their cache lines stay with one core (chunks of 256 rows
-  // dealt in turn gave 1.6x from 1 to 2 threads; contiguous blocks 1.9x).
-#pragma omp parallel for schedule(static) num_threads(thread_count(settings_, n))                  \
-    reduction(min                                                                                  \
-              : unstable)
-  for (std::size_t i = 0; i < n; ++i) {
-    Vec3 fi = P.mass[i] * field_.acceleration(x[i], v[i]) + P.applied_force[i];
-    Vec3 mi = P.applied_moment[i];
-    for (std::uint32_t e = bb_.row_offset[i]; e < bb_.row_offset[i + 1]; ++e) {
-      const std::uint32_t j = bb_.other[e];
-      Vec3 d = x[j] - x[i];
-      if constexpr (Periodic) d += image_shift_[bb_.image[e]];
-      const double dist2 = norm2(d);
-      std::uint16_t pr = bb_.properties[e];
-      if (pr == kNoContact) {
-        const double reach = r[i] + r[j] + bb_default_range;
-        if (dist2 >= reach * reach) continue; // not touching: nothing to do
-        // Contact is born: copy the defaults (of the band of its height).
-        pr = graded ? graded_default(x[i].z + 0.5 * d.z) : bb_default;
-        bb_.state[e] = ContactState{};
+  // Each thread takes one contiguous block of rows: the particles are in cell
+  // order, so most neighbours j of a row i lie in the same block and their
+  // cache lines stay with one core (chunks of 256 rows dealt in turn gave
+  // 1.6x from 1 to 2 threads; contiguous blocks 1.9x). The row owner i sums
+  // its own side and leaves the force and moment on j in the entry;
+  // integrate() gathers those in a fixed order. No two threads write the
+  // same memory, and no sum depends on the thread count.
+#pragma omp parallel num_threads(thread_count(settings_, n)) reduction(min : unstable)
+  {
+    const std::size_t team = static_cast<std::size_t>(omp_get_num_threads());
+    const std::size_t me = static_cast<std::size_t>(omp_get_thread_num());
+    const std::size_t end = n * (me + 1) / team;
+    static thread_local ContactStage stage;
+    // The passes, defined in the parallel region so that `unstable` is this
+    // thread's copy of the reduction variable.
+    // Pass 1 for entries e_begin .. e_end - 1 of row i: the touching ball-ball
+    // contacts into the stage.
+    auto find = [&](std::size_t i, std::uint32_t e_begin, std::uint32_t e_end, ContactStage& s)
+                    [[gnu::always_inline]] {
+                      for (std::uint32_t e = e_begin; e < e_end; ++e) {
+                        const std::uint32_t j = bb_.other[e];
+                        Vec3 d = x[j] - x[i];
+                        if constexpr (Periodic) d += image_shift_[bb_.image[e]];
+                        const double dist2 = norm2(d);
+                        std::uint16_t pr = bb_.properties[e];
+                        if (pr == kNoContact) {
+                          const double reach = r[i] + r[j] + bb_default_range;
+                          if (dist2 >= reach * reach) continue; // not touching: nothing to do
+                          // Contact is born: copy the defaults (of the band of its height).
+                          pr = graded ? graded_default(x[i].z + 0.5 * d.z) : bb_default;
+                          bb_.state[e] = ContactState{};
+                        }
+                        const double dist = std::sqrt(dist2);
+                        const double overlap = r[i] + r[j] - dist;
+                        if (!contact_active(props[pr], overlap) || dist == 0.0) { // contact ends
+                          bb_.properties[e] = kNoContact;
+                          bb_.state[e] = ContactState{};
+                          bb_.force_on_2[e] = {};
+                          bb_.moment_on_2[e] = {};
+                          continue;
+                        }
+                        bb_.properties[e] = pr;
+                        if (overlap > max_overlap * std::min(r[i], r[j]))
+                          unstable = std::min(unstable, e);
+                        const std::uint32_t k = s.count++;
+                        s.entry[k] = e;
+                        s.props[k] = pr;
+                        ContactStage::put(s.dx, s.dy, s.dz, k, d);
+                        s.dist[k] = dist;
+                        s.r1[k] = r[i], s.r2[k] = r[j], s.m1[k] = m[i], s.m2[k] = m[j];
+                        ContactStage::put(s.vx, s.vy, s.vz, k, v[j] - v[i]);
+                        ContactStage::put(s.w1x, s.w1y, s.w1z, k, w[i]);
+                        ContactStage::put(s.w2x, s.w2y, s.w2z, k, w[j]);
+                        ContactStage::put(s.fsx, s.fsy, s.fsz, k, bb_.state[e].shear_force);
+                        ContactStage::put(s.mrx, s.mry, s.mrz, k, bb_.state[e].rolling_moment);
+                      }
+                    };
+
+    // Pass 3 for row i, in three steps: the row's sums start from the body
+    // and applied loads; the staged results of its entries are added in entry
+    // order (from stage index k on, for entries below e_end); then its ball-wall
+    // contacts (end 1 = ball, end 2 = wall) are added and the sums stored.
+    struct RowSums {
+      Vec3 force, moment;
+    };
+    auto start_row = [&](std::size_t i) [[gnu::always_inline]] {
+      return RowSums{P.mass[i] * field_.acceleration(x[i], v[i]) + P.applied_force[i],
+                     P.applied_moment[i]};
+    };
+    auto add_staged = [&](RowSums& sum, const ContactStage& s, std::uint32_t& k,
+                          std::uint32_t e_end) [[gnu::always_inline]] {
+      for (; k < s.count && s.entry[k] < e_end; ++k) {
+        const std::uint32_t e = s.entry[k];
+        const Vec3 f{s.fx[k], s.fy[k], s.fz[k]};
+        bb_.state[e] = {{s.fsx[k], s.fsy[k], s.fsz[k]}, {s.mrx[k], s.mry[k], s.mrz[k]}};
+        bb_.force_on_2[e] = f;
+        bb_.moment_on_2[e] = {s.m2x[k], s.m2y[k], s.m2z[k]};
+        sum.force -= f;
+        sum.moment -= Vec3{s.m1x[k], s.m1y[k], s.m1z[k]};
       }
-      const double dist = std::sqrt(dist2);
-      const double overlap = r[i] + r[j] - dist;
-      const ContactProperties& cp = props[pr];
-      if (!contact_active(cp, overlap) || dist == 0.0) { // contact ends
-        bb_.properties[e] = kNoContact;
-        bb_.state[e] = ContactState{};
-        bb_.force_on_2[e] = {};
-        bb_.moment_on_2[e] = {};
+    };
+    // (The ball-wall part out of line: most rows have no wall entries.)
+    auto walls_of_row = [&](std::size_t i, RowSums& sum) [[gnu::noinline]] {
+      Vec3& fi = sum.force;
+      Vec3& mi = sum.moment;
+      for (std::uint32_t e = bw_.row_offset[i]; e < bw_.row_offset[i + 1]; ++e) {
+        const Wall& wl = walls_[bw_.wall[e]];
+        const WallProximity prox = wall_proximity(wl, x[i]);
+        const double overlap = r[i] - prox.distance;
+        std::uint16_t pr = bw_.properties[e];
+        if (pr == kNoContact) {
+          if (!contact_active(props[wl.properties], overlap)) continue;
+          pr = wl.properties;
+          bw_.state[e] = ContactState{};
+        }
+        const ContactProperties& cp = props[pr];
+        if (!contact_active(cp, overlap)) {
+          bw_.properties[e] = kNoContact;
+          bw_.state[e] = ContactState{};
+          bw_.force_on_wall[e] = {};
+          continue;
+        }
+        bw_.properties[e] = pr;
+        const Vec3 nrm = ball_to_wall_normal(wl, prox);
+        const double a = r[i] - 0.5 * overlap; // lever arm a n to the contact point [m]
+        const ContactGeometry g{
+            nrm, overlap, wl.velocity - v[i] + a * cross(nrm, w[i]), -w[i], r[i], r[i], r[i], m[i]};
+        const ContactResult res = contact_law(cp, g, bw_.state[e], dt);
+        bw_.force_on_wall[e] = res.force;
+        fi -= res.force;
+        mi -= a * cross(nrm, res.force) + res.moment;
+        if (overlap > max_overlap * r[i])
+          unstable = std::min(unstable, UINT32_MAX - 1 - static_cast<std::uint32_t>(i));
+      }
+    };
+    auto finish_row = [&](std::size_t i, RowSums& sum) [[gnu::always_inline]] {
+      if (bw_.row_offset[i] != bw_.row_offset[i + 1]) walls_of_row(i, sum);
+      P.force[i] = sum.force;
+      P.moment[i] = sum.moment;
+    };
+
+    std::size_t i = n * me / team;
+    while (i < end) {
+      const std::uint32_t row_length = bb_.row_offset[i + 1] - bb_.row_offset[i];
+      if (row_length > kStage) {
+        // A row longer than the stage (a large grain among fine ones): its
+        // entries go through the stage kStage at a time, its sums carried on
+        // across the pieces in entry order.
+        RowSums sum = start_row(i);
+        for (std::uint32_t e0 = bb_.row_offset[i]; e0 < bb_.row_offset[i + 1]; e0 += kStage) {
+          const std::uint32_t e1 = std::min(bb_.row_offset[i + 1], e0 + kStage);
+          stage.count = 0;
+          find(i, e0, e1, stage);
+          stage_law_all(stage, props, dt);
+          std::uint32_t k = 0;
+          add_staged(sum, stage, k, e1);
+        }
+        finish_row(i++, sum);
         continue;
       }
-      bb_.properties[e] = pr;
-      const Vec3 nrm = d * (1.0 / dist);
-      // Lever arms from the centres to the contact point: a1 n and -a2 n [m].
-      // With them, the relative velocity at the contact point
-      // (v_j + w_j x (-a2 n)) - (v_i + w_i x a1 n) is (v_j - v_i) - (a1 w_i + a2 w_j) x n,
-      // and the moments of a force F about the centres are a1 (n x F) on i and
-      // -a2 (n x F) on j: one cross product each instead of two.
-      const double a1 = r[i] - 0.5 * overlap, a2 = r[j] - 0.5 * overlap;
-      const ContactGeometry g{nrm,
-                              overlap,
-                              (v[j] - v[i]) - cross(a1 * w[i] + a2 * w[j], nrm),
-                              w[j] - w[i],
-                              std::min(r[i], r[j]),
-                              r[i] + r[j],
-                              r[i] * r[j] / (r[i] + r[j]),
-                              has_dashpot(cp) ? m[i] * m[j] / (m[i] + m[j]) : 0.0};
-      const ContactResult res = contact_law(cp, g, bb_.state[e], dt);
-      const Vec3 nxf = cross(nrm, res.force);
-      bb_.force_on_2[e] = res.force;
-      bb_.moment_on_2[e] = res.moment - a2 * nxf;
-      fi -= res.force;
-      mi -= a1 * nxf + res.moment;
-      if (overlap > max_overlap * std::min(r[i], r[j])) unstable = std::min(unstable, e);
-    }
-    // Ball-wall contacts of ball i (end 1 = ball, end 2 = wall).
-    for (std::uint32_t e = bw_.row_offset[i]; e < bw_.row_offset[i + 1]; ++e) {
-      const Wall& wl = walls_[bw_.wall[e]];
-      const WallProximity prox = wall_proximity(wl, x[i]);
-      const double overlap = r[i] - prox.distance;
-      std::uint16_t pr = bw_.properties[e];
-      if (pr == kNoContact) {
-        if (!contact_active(props[wl.properties], overlap)) continue;
-        pr = wl.properties;
-        bw_.state[e] = ContactState{};
+      // Stage whole rows while they surely fit (a row stages at most its
+      // entries), run the law on them, then apply them row by row.
+      stage.count = 0;
+      const std::size_t first = i;
+      while (i < end && stage.count + (bb_.row_offset[i + 1] - bb_.row_offset[i]) <= kStage) {
+        find(i, bb_.row_offset[i], bb_.row_offset[i + 1], stage);
+        ++i;
       }
-      const ContactProperties& cp = props[pr];
-      if (!contact_active(cp, overlap)) {
-        bw_.properties[e] = kNoContact;
-        bw_.state[e] = ContactState{};
-        bw_.force_on_wall[e] = {};
-        continue;
+      stage_law_all(stage, props, dt);
+      std::uint32_t k = 0;
+      for (std::size_t row = first; row < i; ++row) {
+        RowSums sum = start_row(row);
+        add_staged(sum, stage, k, bb_.row_offset[row + 1]);
+        finish_row(row, sum);
       }
-      bw_.properties[e] = pr;
-      const Vec3 nrm = ball_to_wall_normal(wl, prox);
-      const double a = r[i] - 0.5 * overlap; // lever arm a n to the contact point [m]
-      const ContactGeometry g{
-          nrm, overlap, wl.velocity - v[i] + a * cross(nrm, w[i]), -w[i], r[i], r[i], r[i], m[i]};
-      const ContactResult res = contact_law(cp, g, bw_.state[e], dt);
-      bw_.force_on_wall[e] = res.force;
-      fi -= res.force;
-      mi -= a * cross(nrm, res.force) + res.moment;
-      if (overlap > max_overlap * r[i])
-        unstable = std::min(unstable, UINT32_MAX - 1 - static_cast<std::uint32_t>(i));
     }
-    P.force[i] = fi;
-    P.moment[i] = mi;
   }
   unstable_entry_ = unstable;
 }
