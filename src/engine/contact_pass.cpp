@@ -209,46 +209,44 @@ template <bool Periodic> void World::compute_contacts_impl() {
     // thread's copy of the reduction variable.
     // Pass 1 for entries e_begin .. e_end - 1 of row i: the touching ball-ball
     // contacts into the stage.
-    auto find = [&](std::size_t i, std::uint32_t e_begin, std::uint32_t e_end, ContactStage& s)
-                    [[gnu::always_inline]] {
-                      for (std::uint32_t e = e_begin; e < e_end; ++e) {
-                        const std::uint32_t j = bb_.other[e];
-                        Vec3 d = x[j] - x[i];
-                        if constexpr (Periodic) d += image_shift_[bb_.image[e]];
-                        const double dist2 = norm2(d);
-                        std::uint16_t pr = bb_.properties[e];
-                        if (pr == kNoContact) {
-                          const double reach = r[i] + r[j] + bb_default_range;
-                          if (dist2 >= reach * reach) continue; // not touching: nothing to do
-                          // Contact is born: copy the defaults (of the band of its height).
-                          pr = graded ? graded_default(x[i].z + 0.5 * d.z) : bb_default;
-                          bb_.state[e] = ContactState{};
-                        }
-                        const double dist = std::sqrt(dist2);
-                        const double overlap = r[i] + r[j] - dist;
-                        if (!contact_active(props[pr], overlap) || dist == 0.0) { // contact ends
-                          bb_.properties[e] = kNoContact;
-                          bb_.state[e] = ContactState{};
-                          bb_.force_on_2[e] = {};
-                          bb_.moment_on_2[e] = {};
-                          continue;
-                        }
-                        bb_.properties[e] = pr;
-                        if (overlap > max_overlap * std::min(r[i], r[j]))
-                          unstable = std::min(unstable, e);
-                        const std::uint32_t k = s.count++;
-                        s.entry[k] = e;
-                        s.props[k] = pr;
-                        ContactStage::put(s.dx, s.dy, s.dz, k, d);
-                        s.dist[k] = dist;
-                        s.r1[k] = r[i], s.r2[k] = r[j], s.m1[k] = m[i], s.m2[k] = m[j];
-                        ContactStage::put(s.vx, s.vy, s.vz, k, v[j] - v[i]);
-                        ContactStage::put(s.w1x, s.w1y, s.w1z, k, w[i]);
-                        ContactStage::put(s.w2x, s.w2y, s.w2z, k, w[j]);
-                        ContactStage::put(s.fsx, s.fsy, s.fsz, k, bb_.state[e].shear_force);
-                        ContactStage::put(s.mrx, s.mry, s.mrz, k, bb_.state[e].rolling_moment);
-                      }
-                    };
+    auto find = [&](std::size_t i, std::uint32_t e_begin, std::uint32_t e_end, ContactStage& s) {
+      for (std::uint32_t e = e_begin; e < e_end; ++e) {
+        const std::uint32_t j = bb_.other[e];
+        Vec3 d = x[j] - x[i];
+        if constexpr (Periodic) d += image_shift_[bb_.image[e]];
+        const double dist2 = norm2(d);
+        std::uint16_t pr = bb_.properties[e];
+        if (pr == kNoContact) {
+          const double reach = r[i] + r[j] + bb_default_range;
+          if (dist2 >= reach * reach) continue; // not touching: nothing to do
+          // Contact is born: copy the defaults (of the band of its height).
+          pr = graded ? graded_default(x[i].z + 0.5 * d.z) : bb_default;
+          bb_.state[e] = ContactState{};
+        }
+        const double dist = std::sqrt(dist2);
+        const double overlap = r[i] + r[j] - dist;
+        if (!contact_active(props[pr], overlap) || dist == 0.0) { // contact ends
+          bb_.properties[e] = kNoContact;
+          bb_.state[e] = ContactState{};
+          bb_.force_on_2[e] = {};
+          bb_.moment_on_2[e] = {};
+          continue;
+        }
+        bb_.properties[e] = pr;
+        if (overlap > max_overlap * std::min(r[i], r[j])) unstable = std::min(unstable, e);
+        const std::uint32_t k = s.count++;
+        s.entry[k] = e;
+        s.props[k] = pr;
+        ContactStage::put(s.dx, s.dy, s.dz, k, d);
+        s.dist[k] = dist;
+        s.r1[k] = r[i], s.r2[k] = r[j], s.m1[k] = m[i], s.m2[k] = m[j];
+        ContactStage::put(s.vx, s.vy, s.vz, k, v[j] - v[i]);
+        ContactStage::put(s.w1x, s.w1y, s.w1z, k, w[i]);
+        ContactStage::put(s.w2x, s.w2y, s.w2z, k, w[j]);
+        ContactStage::put(s.fsx, s.fsy, s.fsz, k, bb_.state[e].shear_force);
+        ContactStage::put(s.mrx, s.mry, s.mrz, k, bb_.state[e].rolling_moment);
+      }
+    };
 
     // Pass 3 for row i, in three steps: the row's sums start from the body
     // and applied loads; the staged results of its entries are added in entry
@@ -257,12 +255,12 @@ template <bool Periodic> void World::compute_contacts_impl() {
     struct RowSums {
       Vec3 force, moment;
     };
-    auto start_row = [&](std::size_t i) [[gnu::always_inline]] {
+    auto start_row = [&](std::size_t i) {
       return RowSums{P.mass[i] * field_.acceleration(x[i], v[i]) + P.applied_force[i],
                      P.applied_moment[i]};
     };
     auto add_staged = [&](RowSums& sum, const ContactStage& s, std::uint32_t& k,
-                          std::uint32_t e_end) [[gnu::always_inline]] {
+                          std::uint32_t e_end) {
       for (; k < s.count && s.entry[k] < e_end; ++k) {
         const std::uint32_t e = s.entry[k];
         const Vec3 f{s.fx[k], s.fy[k], s.fz[k]};
@@ -307,7 +305,7 @@ template <bool Periodic> void World::compute_contacts_impl() {
           unstable = std::min(unstable, UINT32_MAX - 1 - static_cast<std::uint32_t>(i));
       }
     };
-    auto finish_row = [&](std::size_t i, RowSums& sum) [[gnu::always_inline]] {
+    auto finish_row = [&](std::size_t i, RowSums& sum) {
       if (bw_.row_offset[i] != bw_.row_offset[i + 1]) walls_of_row(i, sum);
       P.force[i] = sum.force;
       P.moment[i] = sum.moment;
