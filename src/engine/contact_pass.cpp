@@ -44,9 +44,7 @@ void World::compute_contacts() {
 namespace {
 
 constexpr std::size_t kLanes = ContactLanes::size;
-// Contacts staged per flush: small enough that the stage (256 bytes per
-// contact, 35 KB in all) stays in a 48 KB first-level cache.
-constexpr std::uint32_t kStage = 128;
+constexpr std::uint32_t kStage = kContactStageSize; // engine/contacts.hpp
 
 // The touching ball-ball contacts of a few consecutive rows, structure of
 // arrays, padded to whole batches. Inputs are copied in by the find pass;
