@@ -208,21 +208,25 @@ template <bool Periodic> void World::compute_contacts_impl() {
     // Pass 1 for entries e_begin .. e_end - 1 of row i: the touching ball-ball
     // contacts into the stage.
     auto find = [&](std::size_t i, std::uint32_t e_begin, std::uint32_t e_end, ContactStage& s) {
+      // Row i's own values, read once (the stage's stores could alias them).
+      const Vec3 xi = x[i], vi = v[i], wi = w[i];
+      const double ri = r[i], mi = m[i];
+      std::uint32_t count = s.count;
       for (std::uint32_t e = e_begin; e < e_end; ++e) {
         const std::uint32_t j = bb_.other[e];
-        Vec3 d = x[j] - x[i];
+        Vec3 d = x[j] - xi;
         if constexpr (Periodic) d += image_shift_[bb_.image[e]];
         const double dist2 = norm2(d);
         std::uint16_t pr = bb_.properties[e];
         if (pr == kNoContact) {
-          const double reach = r[i] + r[j] + bb_default_range;
+          const double reach = ri + r[j] + bb_default_range;
           if (dist2 >= reach * reach) continue; // not touching: nothing to do
           // Contact is born: copy the defaults (of the band of its height).
-          pr = graded ? graded_default(x[i].z + 0.5 * d.z) : bb_default;
+          pr = graded ? graded_default(xi.z + 0.5 * d.z) : bb_default;
           bb_.state[e] = ContactState{};
         }
         const double dist = std::sqrt(dist2);
-        const double overlap = r[i] + r[j] - dist;
+        const double overlap = ri + r[j] - dist;
         if (!contact_active(props[pr], overlap) || dist == 0.0) { // contact ends
           bb_.properties[e] = kNoContact;
           bb_.state[e] = ContactState{};
@@ -231,19 +235,20 @@ template <bool Periodic> void World::compute_contacts_impl() {
           continue;
         }
         bb_.properties[e] = pr;
-        if (overlap > max_overlap * std::min(r[i], r[j])) unstable = std::min(unstable, e);
-        const std::uint32_t k = s.count++;
+        if (overlap > max_overlap * std::min(ri, r[j])) unstable = std::min(unstable, e);
+        const std::uint32_t k = count++;
         s.entry[k] = e;
         s.props[k] = pr;
         ContactStage::put(s.dx, s.dy, s.dz, k, d);
         s.dist[k] = dist;
-        s.r1[k] = r[i], s.r2[k] = r[j], s.m1[k] = m[i], s.m2[k] = m[j];
-        ContactStage::put(s.vx, s.vy, s.vz, k, v[j] - v[i]);
-        ContactStage::put(s.w1x, s.w1y, s.w1z, k, w[i]);
+        s.r1[k] = ri, s.r2[k] = r[j], s.m1[k] = mi, s.m2[k] = m[j];
+        ContactStage::put(s.vx, s.vy, s.vz, k, v[j] - vi);
+        ContactStage::put(s.w1x, s.w1y, s.w1z, k, wi);
         ContactStage::put(s.w2x, s.w2y, s.w2z, k, w[j]);
         ContactStage::put(s.fsx, s.fsy, s.fsz, k, bb_.state[e].shear_force);
         ContactStage::put(s.mrx, s.mry, s.mrz, k, bb_.state[e].rolling_moment);
       }
+      s.count = count;
     };
 
     // Pass 3 for row i, in three steps: the row's sums start from the body

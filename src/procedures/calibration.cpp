@@ -72,9 +72,7 @@ CurveMisfit curve_misfit(const MeasuredCurve& measured, const SimulatedCurve& si
   const double dh_Pa = weights.height_kPa_per_um * (m.height_difference_m * 1e6) * 1e3;
   // Moduli in kPa: (weight kPa/%) x (relative difference x 100 %) x 1000 Pa/kPa. A modulus
   // measured but not simulated (no loop run) counts as -100 %.
-  auto relative = [](double simulated, double measured) {
-    return measured > 0 ? simulated / measured - 1.0 : 0.0;
-  };
+  auto relative = [](double sim, double meas) { return meas > 0 ? sim / meas - 1.0 : 0.0; };
   m.unloading_modulus_difference =
       relative(simulated.unloading_modulus_Pa, measured.unloading_modulus_Pa);
   m.reloading_modulus_difference =

@@ -383,22 +383,22 @@ void read_target(const toml::node& node, const std::string& P, CalibrationStage&
   // The unload-reload moduli: one per pressure, and the scenario must run the loop.
   for (const bool unloading : {true, false}) {
     const std::string name = unloading ? "unloading_modulus_MPa" : "reloading_modulus_MPa";
-    const toml::node* n = t.get(name);
-    if (!n) continue;
+    const toml::node* mn = t.get(name);
+    if (!mn) continue;
     const std::string mk = P + "." + name;
     if (!(sc.test.unload_reload_fraction > 0))
-      fail(mk, *n,
+      fail(mk, *mn,
            "a modulus target only with an unload-reload loop in the scenario: "
            "shear.unload_reload_fraction in (0, 1), e.g. 0.9 (docs/shear.md)");
-    const toml::array* a = n->as_array();
+    const toml::array* ma = mn->as_array();
     const std::string allowed = fmt::format(
         "a list of {} constrained moduli [MPa] of the unload-reload loop, one per normal stress "
         "of the stage, rising ({} kPa), each > 0",
         st.curves.size(), pressures);
-    if (!a || a->size() != st.curves.size()) fail(mk, *n, allowed);
-    for (std::size_t k = 0; k < a->size(); ++k) {
-      const double MPa = tomlread::as_number((*a)[k], fmt::format("{}[{}]", mk, k), allowed);
-      if (!(MPa > 0)) fail(fmt::format("{}[{}]", mk, k), (*a)[k], allowed);
+    if (!ma || ma->size() != st.curves.size()) fail(mk, *mn, allowed);
+    for (std::size_t k = 0; k < ma->size(); ++k) {
+      const double MPa = tomlread::as_number((*ma)[k], fmt::format("{}[{}]", mk, k), allowed);
+      if (!(MPa > 0)) fail(fmt::format("{}[{}]", mk, k), (*ma)[k], allowed);
       (unloading ? st.curves[k].unloading_modulus_Pa : st.curves[k].reloading_modulus_Pa) =
           MPa * 1e6;
     }
