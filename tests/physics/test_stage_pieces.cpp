@@ -5,9 +5,9 @@
 // the large one by the same overlap delta along its own outward normal n_k,
 // linear law with kn given, no gravity, no walls, no damping. After one step
 // every small sphere carries kn delta n_k, and the large one, by Newton's third
-// law, -kn delta sum_k n_k. A piece dropped, counted twice or cut off gives a
-// small sphere with no force (or twice it) and breaks the large one's sum by at
-// least kn delta.
+// law, -kn delta sum_k n_k. A piece whose results are not stored leaves its
+// small spheres without force; a piece left out of (or added twice to) the
+// row's sum moves the large one's force by about kn delta or more.
 #include "physics_test_util.hpp"
 
 #include "engine/contacts.hpp"
