@@ -228,6 +228,8 @@ std::size_t World::bytes_per_particle() const {
            cap(bb_.incoming);
   bytes += cap(bw_.row_offset) + cap(bw_.wall) + cap(bw_.properties) + cap(bw_.state) +
            cap(bw_.force_on_wall);
+  bytes += cap(timestep_scratch_.end2_share) + cap(timestep_scratch_.row_sum) +
+           cap(timestep_scratch_.row_any);
   return bytes / n;
 }
 

@@ -8,6 +8,7 @@
 #include "base/errors.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <fmt/format.h>
 #include <numeric>
@@ -218,9 +219,19 @@ void World::rebuild(std::vector<std::uint32_t> candidates) {
   const auto& x = p_.position;
   const auto& r = p_.radius;
   const int nthreads = thread_count(settings_, n);
-  // visit(j, image code) for each j > i within reach; with periodic axes a
-  // neighbour cell past the box wraps around and j is taken at its image.
+  // The sorted positions and radii as structure of arrays, padded to whole
+  // batches, so that the distance test below runs kLanes candidates at once.
+  using Lanes = ContactLanes; // physics/lanes.hpp: the widest batch of doubles
+  constexpr std::size_t kLanes = Lanes::size;
+  std::vector<double> sx(n + kLanes, 0.0), sy(n + kLanes, 0.0), sz(n + kLanes, 0.0),
+      sr(n + kLanes, 0.0);
+  for (std::size_t k = 0; k < n; ++k) sx[k] = x[k].x, sy[k] = x[k].y, sz[k] = x[k].z, sr[k] = r[k];
+  // visit(j, image code) for each j > i within reach, in increasing j; with
+  // periodic axes a neighbour cell past the box wraps around and j is taken at
+  // its image. The test is the scalar norm2(x[j] + shift - x[i]) < (r[i] + r[j]
+  // + cut)^2, lane by lane with the same operations in the same order.
   auto for_each_candidate = [&](std::size_t i, auto&& visit) {
+    const Lanes xi(x[i].x), yi(x[i].y), zi(x[i].z), ri(r[i]), cut_lanes(cut);
     std::array<std::int64_t, 3> c{grid.axis_cell(x[i].x, 0), grid.axis_cell(x[i].y, 1),
                                   grid.axis_cell(x[i].z, 2)};
     std::array<std::int64_t, 3> cc{};
@@ -248,11 +259,19 @@ void World::rebuild(std::vector<std::uint32_t> candidates) {
           const Vec3 shift = image_shift_[code];
           const std::size_t cell =
               static_cast<std::size_t>((cc[2] * grid.n[1] + cc[1]) * grid.n[0] + cc[0]);
-          for (std::uint32_t j =
+          const std::uint32_t hi = cell_start[cell + 1];
+          const Lanes shx(shift.x), shy(shift.y), shz(shift.z);
+          for (std::uint32_t j0 =
                    std::max<std::uint32_t>(cell_start[cell], static_cast<std::uint32_t>(i + 1));
-               j < cell_start[cell + 1]; ++j) {
-            const double reach = r[i] + r[j] + cut;
-            if (norm2(x[j] + shift - x[i]) < reach * reach) visit(j, code);
+               j0 < hi; j0 += kLanes) {
+            const Lanes ddx = (Lanes::load_unaligned(&sx[j0]) + shx) - xi;
+            const Lanes ddy = (Lanes::load_unaligned(&sy[j0]) + shy) - yi;
+            const Lanes ddz = (Lanes::load_unaligned(&sz[j0]) + shz) - zi;
+            const Lanes reach = (ri + Lanes::load_unaligned(&sr[j0])) + cut_lanes;
+            std::uint64_t near = lane_bits(ddx * ddx + ddy * ddy + ddz * ddz < reach * reach);
+            if (hi - j0 < kLanes) near &= (std::uint64_t{1} << (hi - j0)) - 1; // past the cell
+            for (; near != 0; near &= near - 1)
+              visit(j0 + static_cast<std::uint32_t>(std::countr_zero(near)), code);
           }
         }
       }
@@ -262,12 +281,21 @@ void World::rebuild(std::vector<std::uint32_t> candidates) {
     return wall_proximity(w, x[i]).distance < r[i] + cut;
   };
 
+  // One sweep over the cells: the neighbours found for each block of rows are
+  // kept, in row order, and copied into the lists once their sizes are known.
+  struct Found {
+    std::uint32_t j;
+    std::uint8_t code;
+  };
+  constexpr std::size_t kBlock = 512; // rows
+  std::vector<std::vector<Found>> found((n + kBlock - 1) / kBlock);
   std::vector<std::uint32_t> count(n + 1, 0), wall_count(n + 1, 0);
-#pragma omp parallel for schedule(static, 512) num_threads(nthreads)
+#pragma omp parallel for schedule(static, kBlock) num_threads(nthreads)
   for (std::size_t i = 0; i < n; ++i) {
-    std::uint32_t c = 0;
-    for_each_candidate(i, [&](std::uint32_t, std::uint8_t) { ++c; });
-    count[i + 1] = c;
+    std::vector<Found>& mine = found[i / kBlock];
+    const std::size_t before = mine.size();
+    for_each_candidate(i, [&](std::uint32_t j, std::uint8_t code) { mine.push_back({j, code}); });
+    count[i + 1] = static_cast<std::uint32_t>(mine.size() - before);
     std::uint32_t cw = 0;
     for (const Wall& w : walls_) cw += near_wall(i, w) ? 1u : 0u;
     wall_count[i + 1] = cw;
@@ -301,11 +329,15 @@ void World::rebuild(std::vector<std::uint32_t> candidates) {
   std::partial_sum(pend_start.begin(), pend_start.end(), pend_start.begin());
   std::partial_sum(pend_wall_start.begin(), pend_wall_start.end(), pend_wall_start.begin());
 
-#pragma omp parallel for schedule(static, 512) num_threads(nthreads)
+#pragma omp parallel for schedule(static, kBlock) num_threads(nthreads)
   for (std::size_t i = 0; i < n; ++i) {
     std::uint32_t e = bb.row_offset[i];
     std::uint32_t q = pend_start[i];
-    for_each_candidate(i, [&](std::uint32_t j, std::uint8_t code) {
+    const std::size_t block = i / kBlock;
+    const Found* f = found[block].data() + (e - bb.row_offset[block * kBlock]);
+    for (const Found* row_end = f + (bb.row_offset[i + 1] - e); f != row_end; ++f) {
+      const std::uint32_t j = f->j;
+      const std::uint8_t code = f->code;
       bb.other[e] = j;
       if (periodic) bb.image[e] = code;
       if (periodic) { // wrapped cells break the increasing-j order: search the row
@@ -325,7 +357,7 @@ void World::rebuild(std::vector<std::uint32_t> candidates) {
         }
       }
       ++e;
-    });
+    }
     std::uint32_t ew = bw.row_offset[i];
     std::uint32_t qw = pend_wall_start[i];
     for (std::size_t k = 0; k < walls_.size(); ++k) {

@@ -33,27 +33,47 @@ double World::critical_timestep() {
     return std::max(ln, lt);
   };
   double max_omega2 = 0.0;
+  // Each touching ball-ball contact's stiffness is evaluated once, in its
+  // row: its share for the first end is summed there, its share for the
+  // second end kept by entry and summed below in the incoming order. The
+  // sums are those of a pass that visits each particle's row entries, then
+  // its incoming entries, then its walls.
+  std::vector<double>& end2_share = timestep_scratch_.end2_share;
+  std::vector<double>& row_sum = timestep_scratch_.row_sum;
+  std::vector<std::uint8_t>& row_any = timestep_scratch_.row_any;
+  end2_share.resize(bb_.entries());
+  row_sum.resize(n);
+  row_any.resize(n);
+#pragma omp parallel for schedule(static, 512) num_threads(thread_count(settings_, n))
+  for (std::size_t i = 0; i < n; ++i) {
+    double w2 = 0.0;
+    bool any = false;
+    for (std::uint32_t e = bb_.row_offset[i]; e < bb_.row_offset[i + 1]; ++e) {
+      const std::uint16_t pr = bb_.properties[e];
+      if (pr == kNoContact) continue;
+      const std::size_t j = bb_.other[e];
+      const double ov = r[i] + r[j] - norm(pair_vector(e, i, j));
+      const ContactGeometry g{
+          {}, ov, {}, {}, std::min(r[i], r[j]), r[i] + r[j], r[i] * r[j] / (r[i] + r[j]), 0.0};
+      const ContactStiffness k = contact_stiffness(props_[pr], g);
+      w2 += omega2(k, m[i], I[i], r[i], 1.0 / m[j], 1.0 / I[j], r[j]);
+      end2_share[e] = omega2(k, m[j], I[j], r[j], 1.0 / m[i], 1.0 / I[i], r[i]);
+      any = true;
+    }
+    row_sum[i] = w2;
+    row_any[i] = any ? 1 : 0;
+  }
 #pragma omp parallel for schedule(static, 512) num_threads(thread_count(settings_, n))             \
     reduction(max                                                                                  \
               : max_omega2)
   for (std::size_t i = 0; i < n; ++i) {
-    double w2 = 0.0;
-    bool any = false;
-    auto pair = [&](std::size_t j, std::uint16_t pr, std::uint32_t e) {
-      const double ov = r[i] + r[j] - norm(i < j ? pair_vector(e, i, j) : pair_vector(e, j, i));
-      const ContactGeometry g{
-          {}, ov, {}, {}, std::min(r[i], r[j]), r[i] + r[j], r[i] * r[j] / (r[i] + r[j]), 0.0};
-      w2 +=
-          omega2(contact_stiffness(props_[pr], g), m[i], I[i], r[i], 1.0 / m[j], 1.0 / I[j], r[j]);
-      any = true;
-    };
-    for (std::uint32_t e = bb_.row_offset[i]; e < bb_.row_offset[i + 1]; ++e)
-      if (bb_.properties[e] != kNoContact) pair(bb_.other[e], bb_.properties[e], e);
+    bool any = row_any[i] != 0;
+    double w2 = row_sum[i];
     for (std::uint32_t k = bb_.incoming_offset[i]; k < bb_.incoming_offset[i + 1]; ++k) {
       const std::uint32_t e = bb_.incoming[k];
       if (bb_.properties[e] == kNoContact) continue;
-      // find the first end of entry e: the row that holds it
-      pair(first_end(e), bb_.properties[e], e);
+      w2 += end2_share[e];
+      any = true;
     }
     for (std::uint32_t e = bw_.row_offset[i]; e < bw_.row_offset[i + 1]; ++e) {
       if (bw_.properties[e] == kNoContact) continue;

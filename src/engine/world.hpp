@@ -315,7 +315,14 @@ private:
   PeriodicBox periodic_;
   std::array<Vec3, 27> image_shift_{};  // shift of image code c = (sx+1) + 3(sy+1) + 9(sz+1)
   std::vector<ContactRecord> restored_; // waiting for the next rebuild
-  double skin_cached_ = 0;              // automatic skin at the last rebuild [m]
+  // Scratch of critical_timestep (kept to spare the allocations): each
+  // contact's share for its second end, and each row's sum and whether it
+  // had a ball-ball contact.
+  struct TimestepScratch {
+    std::vector<double> end2_share, row_sum;
+    std::vector<std::uint8_t> row_any;
+  } timestep_scratch_;
+  double skin_cached_ = 0; // automatic skin at the last rebuild [m]
   // Instability report from the contact pass (first offending entry).
   std::uint32_t unstable_entry_ = UINT32_MAX;
 };

@@ -16,6 +16,8 @@
 #include "base/vec3.hpp"
 
 #include <cmath>
+#include <cstdint>
+#include <type_traits>
 // GCC 12 warns that the intentionally undefined first operand of the AVX-512
 // intrinsics xsimd calls (_mm512_undefined_pd) "may be used uninitialized";
 // it is not read. Off for the lines of those headers only.
@@ -81,6 +83,21 @@ inline bool any_lane(bool m) {
 }
 template <class B> bool any_lane(const xsimd::batch_bool<double, B>& m) {
   return xsimd::any(m);
+}
+
+// The lanes where m holds, as bits: lane l is bit l.
+template <class B> std::uint64_t lane_bits(const xsimd::batch_bool<double, B>& m) {
+  using Mask = xsimd::batch_bool<double, B>;
+  using Register = typename Mask::register_type;
+  if constexpr (std::is_integral_v<Register>) { // AVX-512: the mask register itself
+    return static_cast<Register>(m);
+  } else {
+    alignas(64) bool lane[Mask::size];
+    m.store_aligned(lane);
+    std::uint64_t bits = 0;
+    for (std::size_t l = 0; l < Mask::size; ++l) bits |= std::uint64_t{lane[l]} << l;
+    return bits;
+  }
 }
 
 inline double lane_sqrt(double a) {

@@ -91,6 +91,30 @@ TEST(PhysicsTimestep, SpringMassEstimateIsTwoOverOmega) {
   }
 }
 
+// A small ball held between two big ones, normal springs kn only: its
+// Gershgorin row sums both contacts, kn (1/ms + 1/mb) each, so the estimate
+// is 2 sqrt(mc / (2 kn)) with mc = ms mb / (ms + mb), within 1e-12. The
+// particles sort as big, small, big, so the small ball is the second end of
+// one contact and the first end of the other: the estimate takes each
+// contact's share for both of its ends (its stiffness evaluated once, in the
+// row of its first end; engine/timestep.cpp). Without the second end's share
+// the small ball would see one contact, and the estimate would be sqrt(2)
+// too long.
+TEST(PhysicsTimestep, ParticleBetweenTwoSumsBothContactsWhicheverEndItIs) {
+  const double kn = 1e6, Rs = 0.5 * R;
+  World w(auto_settings());
+  w.set_ball_ball_defaults(direct(kn, 0.0));
+  w.add_particle({0, 0, 0}, R, rho, 0, 1);
+  w.add_particle({2 * (R + Rs) - 2e-7, 0, 0}, R, rho, 0, 2);
+  w.add_particle({R + Rs - 1e-7, 0, 0}, Rs, rho, 0, 3); // between them, added last
+  for (std::uint8_t& f : w.particles_mut().flags) f = fix_translation | fix_rotation;
+  w.cycle(100);
+  ASSERT_EQ(w.ball_ball_contacts().size(), 2u);
+  const double ms = sphere_mass(Rs, rho), mb = sphere_mass(R, rho);
+  const double expected = spring_mass_critical_s(0.5 * ms * mb / (ms + mb), kn);
+  EXPECT_NEAR(w.critical_timestep() / expected, 1.0, 1e-12);
+}
+
 // A ball on a wall, linear model, deformability method (kn = pi R E*,
 // ks = kn/kappa*): kappa* = 1.5 (shear mode governs, 3.5 ks > kn) and
 // kappa* = 5 (normal mode governs): the estimate equals the closed form
