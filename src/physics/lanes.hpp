@@ -88,9 +88,8 @@ template <class B> bool any_lane(const xsimd::batch_bool<double, B>& m) {
 // The lanes where m holds, as bits: lane l is bit l.
 template <class B> std::uint64_t lane_bits(const xsimd::batch_bool<double, B>& m) {
   using Mask = xsimd::batch_bool<double, B>;
-  using Register = typename Mask::register_type;
-  if constexpr (std::is_integral_v<Register>) { // AVX-512: the mask register itself
-    return static_cast<Register>(m);
+  if constexpr (std::is_base_of_v<xsimd::avx512f, B>) { // the mask register itself
+    return static_cast<typename Mask::register_type>(m);
   } else {
     alignas(64) bool lane[Mask::size];
     m.store_aligned(lane);

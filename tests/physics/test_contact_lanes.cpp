@@ -206,3 +206,20 @@ TEST(ContactLanes, EveryLaneGivesTheScalarLawsBits) {
 
 } // namespace
 } // namespace centridem
+
+namespace centridem {
+// lane_bits (the neighbour search's SIMD distance test reads its mask as bits):
+// for every pattern of true lanes of a comparison, bit l is set exactly when
+// lane l holds.
+TEST(ContactLanes, LaneBitsAreTheLanesThatHold) {
+  constexpr std::size_t L = ContactLanes::size;
+  alignas(64) double a[L], b[L];
+  for (std::uint64_t pattern = 0; pattern < (std::uint64_t{1} << L); ++pattern) {
+    for (std::size_t l = 0; l < L; ++l) {
+      a[l] = static_cast<double>(l);
+      b[l] = (pattern >> l & 1) ? a[l] + 1.0 : a[l] - 1.0;
+    }
+    EXPECT_EQ(lane_bits(ContactLanes::load_aligned(a) < ContactLanes::load_aligned(b)), pattern);
+  }
+}
+} // namespace centridem
