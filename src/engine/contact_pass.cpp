@@ -2,15 +2,16 @@
 // ball-ball (j > i) and ball-wall contacts from the contact law
 // (physics/contact_law.hpp), the body force, and the instability guard.
 //
-// Ball-ball contacts go through the law in SIMD batches (ContactLanes: 8
-// contacts at once with AVX-512). Each thread walks its block of rows in
-// three passes over a small stage of contacts:
+// Contacts go through the law in SIMD batches (ContactLanes: 8 contacts at
+// once with AVX-512). Each thread walks its block of rows in three passes
+// over a small stage of contacts (one for ball-ball, one for ball-wall):
 //   1. find: for each neighbour entry, the distance; contacts born or ended;
-//      the touching ones copied into the stage (structure of arrays);
-//   2. law: the stage in batches of one property set, lane by lane the same
+//      the touching ones copied into the stage (structure of arrays); then
+//      the same for the row's ball-wall entries;
+//   2. law: each stage in batches of one property set, lane by lane the same
 //      IEEE operations as the scalar law (physics/lanes.hpp);
 //   3. apply: per row, in entry order, the results summed onto the row's
-//      particle and stored in the entries, then its ball-wall contacts.
+//      particle and stored in the entries, then its ball-wall results.
 // The sums are made in the same order as a single scalar pass would make
 // them, so the bits do not depend on the batching or the thread count.
 #include "engine/thread_count.hpp"
@@ -72,6 +73,24 @@ struct ContactStage {
   }
 };
 
+// The touching ball-wall contacts of the same rows (end 1 = ball, end 2 =
+// wall), with the geometry the scalar pass would form.
+struct WallStage {
+  static constexpr std::size_t kCap = kStage + kLanes;
+  std::uint32_t count = 0;
+  alignas(64) std::uint32_t entry[kCap];
+  alignas(64) std::uint16_t props[kCap];
+  // Inputs: unit normal ball -> wall; overlap [m]; lever arm a = r - overlap/2
+  // [m]; ball radius [m] and mass [kg]; velocity of the wall's contact point
+  // relative to the ball's [m/s]; relative spin, -w_ball [rad/s].
+  alignas(64) double nx[kCap], ny[kCap], nz[kCap], overlap[kCap], lever[kCap], r[kCap], m[kCap];
+  alignas(64) double vx[kCap], vy[kCap], vz[kCap], sx[kCap], sy[kCap], sz[kCap];
+  // State in, new state out (on the wall).
+  alignas(64) double fsx[kCap], fsy[kCap], fsz[kCap], mrx[kCap], mry[kCap], mrz[kCap];
+  // Results: force and pure moment on the wall [N, N m].
+  alignas(64) double fx[kCap], fy[kCap], fz[kCap], mx[kCap], my[kCap], mz[kCap];
+};
+
 using LaneV = LaneVec<ContactLanes>;
 using LaneM = LaneMask<ContactLanes>;
 
@@ -131,26 +150,41 @@ void stage_law(ContactStage& s, std::uint32_t k, const ContactProperties& cp, do
   stage_store(s.m1x, s.m1y, s.m1z, k, a1 * nxf + res.moment, only);
 }
 
-// The law for the whole stage, in batches of kLanes; the last is padded with
-// copies of the last contact (results unused). A batch whose contacts have
-// several property sets (graded defaults, properties changed between stages)
-// runs once per set, each run storing only its own lanes: a lane reads only
-// its own inputs, so the lanes a run does not store do not matter.
-void stage_law_all(ContactStage& s, const ContactProperties* props, double dt) {
-  const std::uint32_t n = s.count;
-  if (n == 0) return;
-  const std::uint32_t padded = static_cast<std::uint32_t>((n + kLanes - 1) / kLanes * kLanes);
-  for (std::uint32_t k = n; k < padded; ++k) {
-    s.props[k] = s.props[n - 1];
-    for (double* a :
-         {s.dx,  s.dy,  s.dz,  s.dist, s.r1,  s.r2,  s.m1,  s.m2,  s.vx,  s.vy,  s.vz, s.w1x,
-          s.w1y, s.w1z, s.w2x, s.w2y,  s.w2z, s.fsx, s.fsy, s.fsz, s.mrx, s.mry, s.mrz})
-      a[k] = a[n - 1];
-  }
+// The ball-wall law for the batch k .. k + kLanes - 1 (as stage_law).
+void wall_stage_law(WallStage& s, std::uint32_t k, const ContactProperties& cp, double dt,
+                    const LaneM* only = nullptr) {
+  using T = ContactLanes;
+  const T r = stage_load(s.r, k);
+  const ContactGeometryT<T> g{stage_load(s.nx, s.ny, s.nz, k),
+                              stage_load(s.overlap, k),
+                              stage_load(s.vx, s.vy, s.vz, k),
+                              stage_load(s.sx, s.sy, s.sz, k),
+                              r,
+                              r,
+                              r,
+                              stage_load(s.m, k)};
+  ContactStateT<T> state{stage_load(s.fsx, s.fsy, s.fsz, k), stage_load(s.mrx, s.mry, s.mrz, k)};
+  const ContactResultT<T> res = contact_law(cp, g, state, dt);
+  stage_store(s.fsx, s.fsy, s.fsz, k, state.shear_force, only);
+  stage_store(s.mrx, s.mry, s.mrz, k, state.rolling_moment, only);
+  stage_store(s.fx, s.fy, s.fz, k, res.force, only);
+  stage_store(s.mx, s.my, s.mz, k, res.moment, only);
+}
+
+// The law for a whole stage of n contacts with property sets props, in
+// batches of kLanes (the caller pads the last batch with copies of the last
+// contact, results unused): law(k0, properties, mask). A batch whose
+// contacts have several property sets (graded defaults, properties changed
+// between stages) runs once per set, each run storing only its own lanes: a
+// lane reads only its own inputs, so the lanes a run does not store do not
+// matter.
+template <class Law>
+void law_in_batches(std::uint32_t padded, const std::uint16_t* props_of,
+                    const ContactProperties* props, Law&& law) {
   for (std::uint32_t k0 = 0; k0 < padded; k0 += kLanes) {
-    const std::uint16_t* pr = s.props + k0;
+    const std::uint16_t* pr = props_of + k0;
     if (std::all_of(pr + 1, pr + kLanes, [&](std::uint16_t p) { return p == pr[0]; })) {
-      stage_law(s, k0, props[pr[0]], dt);
+      law(k0, props[pr[0]], nullptr);
       continue;
     }
     alignas(64) double id[kLanes];
@@ -159,9 +193,43 @@ void stage_law_all(ContactStage& s, const ContactProperties* props, double dt) {
     for (std::size_t l = 0; l < kLanes; ++l) {
       if (std::find(pr, pr + l, pr[l]) != pr + l) continue; // this set has run
       const LaneM mine = ids == ContactLanes(id[l]);
-      stage_law(s, k0, props[pr[l]], dt, &mine);
+      law(k0, props[pr[l]], &mine);
     }
   }
+}
+
+// Pads a stage of n contacts to whole batches with copies of the last one;
+// returns the padded size.
+template <class Stage> std::uint32_t pad_stage(Stage& s, std::initializer_list<double*> arrays) {
+  const std::uint32_t n = s.count;
+  const std::uint32_t padded = static_cast<std::uint32_t>((n + kLanes - 1) / kLanes * kLanes);
+  for (std::uint32_t k = n; k < padded; ++k) {
+    s.props[k] = s.props[n - 1];
+    for (double* a : arrays) a[k] = a[n - 1];
+  }
+  return padded;
+}
+
+void stage_law_all(ContactStage& s, const ContactProperties* props, double dt) {
+  if (s.count == 0) return;
+  const std::uint32_t padded = pad_stage(
+      s, {s.dx,  s.dy,  s.dz,  s.dist, s.r1,  s.r2,  s.m1,  s.m2,  s.vx,  s.vy,  s.vz, s.w1x,
+          s.w1y, s.w1z, s.w2x, s.w2y,  s.w2z, s.fsx, s.fsy, s.fsz, s.mrx, s.mry, s.mrz});
+  law_in_batches(padded, s.props, props,
+                 [&](std::uint32_t k0, const ContactProperties& cp, const LaneM* only) {
+                   stage_law(s, k0, cp, dt, only);
+                 });
+}
+
+void wall_stage_law_all(WallStage& s, const ContactProperties* props, double dt) {
+  if (s.count == 0) return;
+  const std::uint32_t padded =
+      pad_stage(s, {s.nx, s.ny, s.nz, s.overlap, s.lever, s.r, s.m, s.vx, s.vy, s.vz, s.sx, s.sy,
+                    s.sz, s.fsx, s.fsy, s.fsz, s.mrx, s.mry, s.mrz});
+  law_in_batches(padded, s.props, props,
+                 [&](std::uint32_t k0, const ContactProperties& cp, const LaneM* only) {
+                   wall_stage_law(s, k0, cp, dt, only);
+                 });
 }
 
 } // namespace
@@ -203,6 +271,7 @@ template <bool Periodic> void World::compute_contacts_impl() {
     const std::size_t me = static_cast<std::size_t>(omp_get_thread_num());
     const std::size_t end = n * (me + 1) / team;
     static thread_local ContactStage stage;
+    static thread_local WallStage wall_stage;
     // The passes, defined in the parallel region so that `unstable` is this
     // thread's copy of the reduction variable.
     // Pass 1 for entries e_begin .. e_end - 1 of row i: the touching ball-ball
@@ -274,11 +343,11 @@ template <bool Periodic> void World::compute_contacts_impl() {
         sum.moment -= Vec3{s.m1x[k], s.m1y[k], s.m1z[k]};
       }
     };
-    // (The ball-wall part out of line: most rows have no wall entries.)
-    auto walls_of_row = [&](std::size_t i, RowSums& sum) [[gnu::noinline]] {
-      Vec3& fi = sum.force;
-      Vec3& mi = sum.moment;
-      for (std::uint32_t e = bw_.row_offset[i]; e < bw_.row_offset[i + 1]; ++e) {
+    // Pass 1 for ball-wall entries e_begin .. e_end - 1 of row i (end 1 =
+    // ball, end 2 = wall): the touching ones into the wall stage.
+    auto find_walls = [&](std::size_t i, std::uint32_t e_begin, std::uint32_t e_end, WallStage& s) {
+      std::uint32_t count = s.count;
+      for (std::uint32_t e = e_begin; e < e_end; ++e) {
         const Wall& wl = walls_[bw_.wall[e]];
         const WallProximity prox = wall_proximity(wl, x[i]);
         const double overlap = r[i] - prox.distance;
@@ -288,39 +357,51 @@ template <bool Periodic> void World::compute_contacts_impl() {
           pr = wl.properties;
           bw_.state[e] = ContactState{};
         }
-        const ContactProperties& cp = props[pr];
-        if (!contact_active(cp, overlap)) {
+        if (!contact_active(props[pr], overlap)) {
           bw_.properties[e] = kNoContact;
           bw_.state[e] = ContactState{};
           bw_.force_on_wall[e] = {};
           continue;
         }
         bw_.properties[e] = pr;
-        const Vec3 nrm = ball_to_wall_normal(wl, prox);
-        const double a = r[i] - 0.5 * overlap; // lever arm a n to the contact point [m]
-        const ContactGeometry g{
-            nrm, overlap, wl.velocity - v[i] + a * cross(nrm, w[i]), -w[i], r[i], r[i], r[i], m[i]};
-        const ContactResult res = contact_law(cp, g, bw_.state[e], dt);
-        bw_.force_on_wall[e] = res.force;
-        fi -= res.force;
-        mi -= a * cross(nrm, res.force) + res.moment;
         if (overlap > max_overlap * r[i])
           unstable = std::min(unstable, UINT32_MAX - 1 - static_cast<std::uint32_t>(i));
+        const Vec3 nrm = ball_to_wall_normal(wl, prox);
+        const double a = r[i] - 0.5 * overlap; // lever arm a n to the contact point [m]
+        const std::uint32_t k = count++;
+        s.entry[k] = e;
+        s.props[k] = pr;
+        ContactStage::put(s.nx, s.ny, s.nz, k, nrm);
+        s.overlap[k] = overlap, s.lever[k] = a, s.r[k] = r[i], s.m[k] = m[i];
+        ContactStage::put(s.vx, s.vy, s.vz, k, wl.velocity - v[i] + a * cross(nrm, w[i]));
+        ContactStage::put(s.sx, s.sy, s.sz, k, -w[i]);
+        ContactStage::put(s.fsx, s.fsy, s.fsz, k, bw_.state[e].shear_force);
+        ContactStage::put(s.mrx, s.mry, s.mrz, k, bw_.state[e].rolling_moment);
       }
+      s.count = count;
     };
-    auto finish_row = [&](std::size_t i, RowSums& sum) {
-      if (bw_.row_offset[i] != bw_.row_offset[i + 1]) walls_of_row(i, sum);
-      P.force[i] = sum.force;
-      P.moment[i] = sum.moment;
+    // Pass 3 for a row's staged ball-wall results, summed after its ball-ball
+    // ones.
+    auto add_wall_staged = [&](RowSums& sum, const WallStage& s, std::uint32_t& k,
+                               std::uint32_t e_end) {
+      for (; k < s.count && s.entry[k] < e_end; ++k) {
+        const std::uint32_t e = s.entry[k];
+        const Vec3 f{s.fx[k], s.fy[k], s.fz[k]};
+        const Vec3 nrm{s.nx[k], s.ny[k], s.nz[k]};
+        bw_.state[e] = {{s.fsx[k], s.fsy[k], s.fsz[k]}, {s.mrx[k], s.mry[k], s.mrz[k]}};
+        bw_.force_on_wall[e] = f;
+        sum.force -= f;
+        sum.moment -= s.lever[k] * cross(nrm, f) + Vec3{s.mx[k], s.my[k], s.mz[k]};
+      }
     };
 
     std::size_t i = n * me / team;
     while (i < end) {
       const std::uint32_t row_length = bb_.row_offset[i + 1] - bb_.row_offset[i];
-      if (row_length > kStage) {
+      if (row_length > kStage || bw_.row_offset[i + 1] - bw_.row_offset[i] > kStage) {
         // A row longer than the stage (a large grain among fine ones): its
         // entries go through the stage kStage at a time, its sums carried on
-        // across the pieces in entry order.
+        // across the pieces in entry order; then its ball-wall entries alike.
         RowSums sum = start_row(i);
         for (std::uint32_t e0 = bb_.row_offset[i]; e0 < bb_.row_offset[i + 1]; e0 += kStage) {
           const std::uint32_t e1 = std::min(bb_.row_offset[i + 1], e0 + kStage);
@@ -330,23 +411,40 @@ template <bool Periodic> void World::compute_contacts_impl() {
           std::uint32_t k = 0;
           add_staged(sum, stage, k, e1);
         }
-        finish_row(i++, sum);
+        for (std::uint32_t e0 = bw_.row_offset[i]; e0 < bw_.row_offset[i + 1]; e0 += kStage) {
+          const std::uint32_t e1 = std::min(bw_.row_offset[i + 1], e0 + kStage);
+          wall_stage.count = 0;
+          find_walls(i, e0, e1, wall_stage);
+          wall_stage_law_all(wall_stage, props, dt);
+          std::uint32_t k = 0;
+          add_wall_staged(sum, wall_stage, k, e1);
+        }
+        P.force[i] = sum.force;
+        P.moment[i] = sum.moment;
+        ++i;
         continue;
       }
       // Stage whole rows while they surely fit (a row stages at most its
       // entries), run the law on them, then apply them row by row.
       stage.count = 0;
+      wall_stage.count = 0;
       const std::size_t first = i;
-      while (i < end && stage.count + (bb_.row_offset[i + 1] - bb_.row_offset[i]) <= kStage) {
+      while (i < end && stage.count + (bb_.row_offset[i + 1] - bb_.row_offset[i]) <= kStage &&
+             wall_stage.count + (bw_.row_offset[i + 1] - bw_.row_offset[i]) <= kStage) {
         find(i, bb_.row_offset[i], bb_.row_offset[i + 1], stage);
+        if (bw_.row_offset[i] != bw_.row_offset[i + 1])
+          find_walls(i, bw_.row_offset[i], bw_.row_offset[i + 1], wall_stage);
         ++i;
       }
       stage_law_all(stage, props, dt);
-      std::uint32_t k = 0;
+      wall_stage_law_all(wall_stage, props, dt);
+      std::uint32_t k = 0, kw = 0;
       for (std::size_t row = first; row < i; ++row) {
         RowSums sum = start_row(row);
         add_staged(sum, stage, k, bb_.row_offset[row + 1]);
-        finish_row(row, sum);
+        add_wall_staged(sum, wall_stage, kw, bw_.row_offset[row + 1]);
+        P.force[row] = sum.force;
+        P.moment[row] = sum.moment;
       }
     }
   }
