@@ -29,8 +29,8 @@ ASAN_EXCLUDE := ^(SlopeTrialTest\.InterruptedAndResumedTrialEndsBitForBitLikeAnU
 JOBS        ?= $(shell nproc 2>/dev/null || echo 2)
 # Profile-guided optimisation of the Release build (PGO=0 turns it off): an instrumented build in
 # $(PGO_DIR)/ runs the examples (scripts/pgo_train.sh, about a minute), then $(BUILD_DIR)/ is
-# compiled with the profile it wrote. 1.1-1.2x the particle-steps per second of the same source
-# without it, same bits (docs/results/bench.md, 2026-12-04).
+# compiled with the profile it wrote. About 1.1x the particle-steps per second of the same source
+# without it (1.06 flowing, 1.13 packed), same bits (docs/results/bench.md, 2026-12-04).
 PGO         ?= 1
 PGO_DIR     := build-pgo
 CENTRIDEM   := ./$(BUILD_DIR)/centridem
