@@ -29,10 +29,14 @@ struct BallBallContacts {
   std::vector<std::uint16_t> properties; // property-set index, or kNoContact
   std::vector<ContactState> state;       // history
   std::vector<std::uint8_t> image;       // periodic image code of j (empty if not periodic)
-  // This step's force and total moment on j (zero when not touching). The
-  // row owner i sums its own side directly; j gathers these in integrate().
-  std::vector<Vec3> force_on_2;  // [N]
-  std::vector<Vec3> moment_on_2; // [N m]
+  // This step's force [N] and total moment [N m] on j (zero when not
+  // touching), side by side: the contact pass writes both and integrate()
+  // gathers both for j, one record per entry. The row owner i sums its own
+  // side directly.
+  struct LoadOn2 {
+    Vec3 force, moment;
+  };
+  std::vector<LoadOn2> on_2;
   // Transpose: for particle j, the entries in which it is the second end.
   std::vector<std::uint32_t> incoming_offset; // size n+1
   std::vector<std::uint32_t> incoming;        // entry indices
@@ -40,7 +44,7 @@ struct BallBallContacts {
   std::size_t entries() const { return other.size(); }
   static constexpr std::size_t bytes_per_entry() {
     return sizeof(std::uint32_t) * 2 + sizeof(std::uint16_t) + sizeof(ContactState) +
-           2 * sizeof(Vec3);
+           sizeof(LoadOn2);
   }
 };
 

@@ -37,8 +37,8 @@ void World::integrate() {
       Vec3 mo = P.moment[i];
       for (std::uint32_t k = bb_.incoming_offset[i]; k < bb_.incoming_offset[i + 1]; ++k) {
         const std::uint32_t e = bb_.incoming[k];
-        f += bb_.force_on_2[e];
-        mo += bb_.moment_on_2[e];
+        f += bb_.on_2[e].force;
+        mo += bb_.on_2[e].moment;
       }
       P.force[i] = f;
       P.moment[i] = mo;

@@ -311,8 +311,7 @@ void World::rebuild(std::vector<std::uint32_t> candidates) {
   const bool periodic = periodic_.any();
   if (periodic) bb.image.resize(entries);
   bb.state.assign(entries, ContactState{});
-  bb.force_on_2.resize(entries);
-  bb.moment_on_2.resize(entries);
+  bb.on_2.resize(entries);
   BallWallContacts bw;
   bw.row_offset = std::move(wall_count);
   const std::size_t wall_entries = bw.row_offset[n];
