@@ -33,8 +33,8 @@ JOBS        ?= $(shell nproc 2>/dev/null || echo 2)
 # without it (1.06 flowing, 1.13 packed), same bits (docs/results/bench.md, 2026-12-04).
 PGO         ?= 1
 # Link-time optimisation of the centridem program (CENTRIDEM_LTO), with the profile by default:
-# about 1.04x more on top of it, same bits (docs/results/bench.md, 2026-12-04 evening). LTO=0
-# turns it off.
+# about 1.04x packed and 1.02x flowing on top of it, same bits (docs/results/bench.md,
+# 2026-12-04 evening). LTO=0 turns it off.
 LTO         ?= $(PGO)
 PGO_DIR     := build-pgo
 CENTRIDEM   := ./$(BUILD_DIR)/centridem
