@@ -36,6 +36,9 @@ PGO         ?= 1
 # about 1.04x packed and 1.02x flowing on top of it, same bits (docs/results/bench.md,
 # 2026-12-04 evening). LTO=0 turns it off.
 LTO         ?= $(PGO)
+ifneq ($(filter-out 0 1,$(PGO) $(LTO)),)
+$(error PGO = "$(PGO)", LTO = "$(LTO)": each must be 0 (off) or 1 (on))
+endif
 PGO_DIR     := build-pgo
 CENTRIDEM   := ./$(BUILD_DIR)/centridem
 # Re-run scripts/setup.sh only when it changes (or after `make clean`).
