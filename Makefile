@@ -39,6 +39,7 @@ LTO         ?= $(PGO)
 ifneq ($(filter-out 0 1,$(PGO) $(LTO)),)
 $(error PGO = "$(PGO)", LTO = "$(LTO)": each must be 0 (off) or 1 (on))
 endif
+LTO_FLAG     = -DCENTRIDEM_LTO=$(if $(filter 1,$(LTO)),ON,OFF)
 PGO_DIR     := build-pgo
 CENTRIDEM   := ./$(BUILD_DIR)/centridem
 # Re-run scripts/setup.sh only when it changes (or after `make clean`).
@@ -78,14 +79,14 @@ build: setup
 ifeq ($(PGO),1)
 	cmake -S . -B $(PGO_DIR) -DCMAKE_BUILD_TYPE=$(BUILD_TYPE) -DCENTRIDEM_PGO=generate \
 	  -DCENTRIDEM_PGO_DIR=$(CURDIR)/$(PGO_DIR)/profile -DCENTRIDEM_BUILD_TESTS=OFF \
-	  -DCENTRIDEM_BUILD_BENCH=OFF -DCENTRIDEM_LTO=$(if $(filter 1,$(LTO)),ON,OFF)
+	  -DCENTRIDEM_BUILD_BENCH=OFF $(LTO_FLAG)
 	cmake --build $(PGO_DIR) -j$(JOBS) --target centridem
 	bash scripts/pgo_train.sh $(PGO_DIR)/centridem $(PGO_DIR)/profile
 	cmake -S . -B $(BUILD_DIR) -DCMAKE_BUILD_TYPE=$(BUILD_TYPE) -DCENTRIDEM_PGO=use \
-	  -DCENTRIDEM_PGO_DIR=$(CURDIR)/$(PGO_DIR)/profile -DCENTRIDEM_LTO=$(if $(filter 1,$(LTO)),ON,OFF)
+	  -DCENTRIDEM_PGO_DIR=$(CURDIR)/$(PGO_DIR)/profile $(LTO_FLAG)
 else
 	cmake -S . -B $(BUILD_DIR) -DCMAKE_BUILD_TYPE=$(BUILD_TYPE) -DCENTRIDEM_PGO= \
-	  -DCENTRIDEM_LTO=$(if $(filter 1,$(LTO)),ON,OFF)
+	  $(LTO_FLAG)
 endif
 	cmake --build $(BUILD_DIR) -j$(JOBS)
 
