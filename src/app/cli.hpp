@@ -54,12 +54,25 @@ void set_error_messages(CLI::App& app);
 // exit code (2) or 0 when argv[1] is a subcommand, a flag or absent.
 int check_subcommand(const CLI::App& app, int argc, char** argv);
 
-// OpenMP's threads spin while they wait unless told otherwise, and a spinning
-// team beside another job on the same cores runs many times slower. libgomp
-// reads OMP_WAIT_POLICY when the program loads, so when the environment does
-// not set it this sets it to "passive" and starts the program again (once);
-// a user's own OMP_WAIT_POLICY is kept.
-void use_passive_openmp_wait(char** argv);
+// How OpenMP's idle threads wait between the parallel regions of a step.
+// Spinning long (libgomp's default, about 3 ms) makes a team beside another
+// job on the same cores run many times slower; sleeping at once (passive)
+// costs a wake-up through the kernel at every region, which made 2 threads
+// 2.6x slower than a short spin on a 2,025-sphere column and 10 % slower on
+// the 30,000-sphere bench on an idle machine (docs/results/bench.md,
+// 2026-12-04). So: a short spin (GOMP_SPINCOUNT kShortSpinCount, tens of
+// microseconds) then sleep when no other task is runnable as the program
+// starts, and passive otherwise. libgomp reads its environment when the
+// program loads, so this sets it and starts the program again (once); a
+// user's own OMP_WAIT_POLICY or GOMP_SPINCOUNT is kept.
+inline constexpr const char* kShortSpinCount = "3000";
+// The choice, from the number of other runnable tasks (/proc/loadavg's
+// running count less this process; negative: unknown): true for the short
+// spin, which only an otherwise idle machine gets.
+bool short_openmp_spin(int other_runnable_tasks);
+// Other runnable tasks right now (/proc/loadavg), or -1 if unreadable.
+int other_runnable_tasks();
+void choose_openmp_wait(char** argv);
 
 // Prints each "centridem: warning: ..." line to stderr (a scenario's
 // plausibility warnings: the run goes on).

@@ -85,7 +85,7 @@ int run_run_command(const RunCommand& c) {
 } // namespace
 
 int main(int argc, char** argv) {
-  cli::use_passive_openmp_wait(argv);
+  cli::choose_openmp_wait(argv);
   CLI::App app{"centridem: 3D DEM for geotechnical centrifuge modelling"};
   app.require_subcommand(1);
   app.set_version_flag("--version", cli::version_string());
