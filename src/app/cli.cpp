@@ -232,6 +232,14 @@ void choose_openmp_wait(char** argv) {
   // Not restarted (no /proc): go on with OpenMP's default policy.
 }
 
+std::string openmp_wait_in_use() {
+  std::string out;
+  for (const char* name : {"OMP_WAIT_POLICY", "GOMP_SPINCOUNT"})
+    if (const char* v = std::getenv(name))
+      out += (out.empty() ? "" : " ") + std::string(name) + "=" + v;
+  return out.empty() ? "libgomp default" : out;
+}
+
 void print_warnings(const std::vector<std::string>& warnings) {
   for (const std::string& w : warnings) fmt::print(stderr, "centridem: warning: {}\n", w);
   std::fflush(stderr);

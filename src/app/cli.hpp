@@ -73,6 +73,9 @@ bool short_openmp_spin(int other_runnable_tasks);
 // Other runnable tasks right now (/proc/loadavg), or -1 if unreadable.
 int other_runnable_tasks();
 void choose_openmp_wait(char** argv);
+// The wait in use, for reports: "OMP_WAIT_POLICY=passive GOMP_SPINCOUNT=3000", or
+// "libgomp default" when neither is set.
+std::string openmp_wait_in_use();
 
 // Prints each "centridem: warning: ..." line to stderr (a scenario's
 // plausibility warnings: the run goes on).

@@ -272,6 +272,19 @@ TEST(CommandLine, OpenMPWaitsPassivelyBesideBusyTasksAndKeepsTheUsersSetting) {
                     {"OMP_WAIT_POLICY", "GOMP_SPINCOUNT=1234", "OMP_DISPLAY_ENV=verbose"});
   EXPECT_EQ(own.code, 0) << own.output;
   EXPECT_EQ(spin_count(own.output), "1234") << own.output;
+  // The benchmark reports the wait it ran with.
+  {
+    std::ofstream f(dir / "tiny.xyzr");
+    for (int k = 0; k < 8; ++k)
+      f << 1e-3 * (1 + k % 2) << ' ' << 1e-3 * (1 + k / 2 % 2) << ' ' << 1e-3 * (1 + k / 4) << ' '
+        << 2e-4 << '\n';
+  }
+  const auto bench = run_centridem({"bench", "--packing", (dir / "tiny.xyzr").string(), "--steps",
+                                    "2", "--warmup", "0", "--threads", "1"},
+                                   dir / "log", 60, {"OMP_WAIT_POLICY", "GOMP_SPINCOUNT=1234"});
+  EXPECT_EQ(bench.code, 0) << bench.output;
+  EXPECT_TRUE(bench.output.find("openmp_wait: GOMP_SPINCOUNT=1234\n") != std::string::npos)
+      << bench.output;
 }
 
 } // namespace
