@@ -195,10 +195,10 @@ int check_subcommand(const CLI::App& app, int argc, char** argv) {
   return 2;
 }
 
-bool short_openmp_spin(int other_runnable_tasks) {
-  return other_runnable_tasks == 0;
-}
+namespace {
 
+// Other runnable tasks right now, or -1 if unknown (no /proc/loadavg). The
+// short spin is only for an otherwise idle machine: 0.
 int other_runnable_tasks() {
   // "0.52 0.58 0.59 1/123 4567": the fourth field is runnable/total tasks,
   // this process (reading the file) among the runnable ones. The least of
@@ -220,13 +220,13 @@ int other_runnable_tasks() {
   return least;
 }
 
+} // namespace
+
 void choose_openmp_wait(char** argv) {
   if (std::getenv("OMP_WAIT_POLICY") != nullptr || std::getenv("GOMP_SPINCOUNT") != nullptr) return;
   // Passive with an explicit spin count: libgomp spins that many times, then
   // sleeps (and spins not at all when it runs more threads than CPUs).
-  if (short_openmp_spin(other_runnable_tasks()) &&
-      ::setenv("GOMP_SPINCOUNT", kShortSpinCount, 1) != 0)
-    return;
+  if (other_runnable_tasks() == 0 && ::setenv("GOMP_SPINCOUNT", kShortSpinCount, 1) != 0) return;
   if (::setenv("OMP_WAIT_POLICY", "passive", 1) != 0) return;
   ::execv("/proc/self/exe", argv);
   // Not restarted (no /proc): go on with OpenMP's default policy.

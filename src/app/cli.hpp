@@ -66,12 +66,6 @@ int check_subcommand(const CLI::App& app, int argc, char** argv);
 // program loads, so this sets it and starts the program again (once); a
 // user's own OMP_WAIT_POLICY or GOMP_SPINCOUNT is kept.
 inline constexpr const char* kShortSpinCount = "3000";
-// The choice, from the number of other runnable tasks (/proc/loadavg's
-// running count less this process; negative: unknown): true for the short
-// spin, which only an otherwise idle machine gets.
-bool short_openmp_spin(int other_runnable_tasks);
-// Other runnable tasks right now (/proc/loadavg), or -1 if unreadable.
-int other_runnable_tasks();
 void choose_openmp_wait(char** argv);
 // The wait in use, for reports: "OMP_WAIT_POLICY=passive GOMP_SPINCOUNT=3000", or
 // "libgomp default" when neither is set.
