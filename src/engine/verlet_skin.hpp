@@ -13,21 +13,18 @@
 // largest particle plus wall displacement, the rebuild criterion of
 // World::integrate, over the steps since the rebuild) and the rate at the
 // present speeds (2 v_max dt, or (v_max + wall speed) dt: a packing that
-// starts to move after a long rest is not judged by its rest), bounded to
-// [largest / 16, largest], largest = half the smallest radius (the fixed skin
-// before the choice was automatic, so a list is never thicker than it was
-// then). So rebuilds take about 5 % of the time at most, and a packing that
-// barely moves keeps a thin shell.
+// starts to move after a long rest is not judged by its rest), bounded to [largest / 16, largest],
+// largest = half the smallest radius (the fixed skin before the choice was automatic, so a list is
+// never thicker than it was then). So rebuilds take at most about 5 % of the time, and a packing
+// that barely moves keeps a thin shell.
 //
-// Measured (issue 18, docs/results/bench.md, "An automatic Verlet skin"): on
-// the 30,000-sphere bench packing at rest the skin falls from 62.5 to 24 um
-// and the lists from 3.49 to 2.84 entries per particle, and the benchmark runs
-// 5-7 % faster (there, an entry that does not touch costs about 22 ns per
-// step: the data outgrow the cache); on the flowing column (14,534 grains,
-// where entries cost next to nothing) the skin is 34-62.5 um and the extra
-// rebuilds cost 2-3 %. The rule reads only the run's own state (displacements,
-// speeds and step counts), never a timing, so the skin, the rebuild steps and
-// the bits of a run do not depend on the machine or the thread count.
+// Measured (issue 18, docs/results/bench.md): on the 30,000-sphere bench
+// packing at rest the lists fall from 3.49 to about 2.6 entries per particle
+// and the benchmark runs faster; the flowing column, whose motion uses up the
+// largest skin in about 90 steps, keeps it. The rule reads only the run's own
+// state (displacements and step counts), never a timing, so the skin, the
+// rebuild steps and the bits of a run do not depend on the machine or the
+// thread count.
 #pragma once
 
 #include <algorithm>
