@@ -113,14 +113,9 @@ void World::integrate() {
     }
   }
 
-  // The lists hold while no pair can have closed the skin: two particles each
-  // moved at most max_move, a particle and a wall max_move + max_wall_move.
   const double max_move = std::sqrt(max_move2);
-  const double used = std::max(2.0 * max_move, max_move + max_wall_move);
-  if (used > skin()) {
-    dirty_ = true;
-    if (!(settings_.neighbour_skin_m > 0)) next_skin_m_ = next_automatic_skin(used);
-  }
+  const double s = skin();
+  if (2.0 * max_move > s || max_move + max_wall_move > s) dirty_ = true;
 }
 
 } // namespace centridem

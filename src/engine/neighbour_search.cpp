@@ -3,7 +3,6 @@
 // order, and the carry-over of contact history across rebuilds; also the
 // build state that lets a checkpoint resume without a fresh rebuild.
 #include "engine/thread_count.hpp"
-#include "engine/verlet_skin.hpp"
 #include "engine/world.hpp"
 
 #include "base/errors.hpp"
@@ -23,21 +22,8 @@ namespace centridem {
 double World::skin() const {
   if (settings_.neighbour_skin_m > 0) return settings_.neighbour_skin_m;
   if (p_.size() == 0) return 0.0;
-  if (skin_m_ > 0) return skin_m_;
+  if (skin_cached_ > 0) return skin_cached_;
   return 0.5 * *std::min_element(p_.radius.begin(), p_.radius.end());
-}
-
-// Called by the integration when the lists are used up: the automatic skin
-// for the next ones, from how fast these were used up (engine/verlet_skin.hpp).
-double World::next_automatic_skin(double used_m) const {
-  if (p_.size() == 0) return 0.0;
-  const double largest = 0.5 * *std::min_element(p_.radius.begin(), p_.radius.end());
-  double v2 = 0.0, wall_speed = 0.0;
-  for (const Vec3& v : p_.velocity) v2 = std::max(v2, norm2(v));
-  for (const Wall& wl : walls_) wall_speed = std::max(wall_speed, norm(wl.velocity));
-  const double v = std::sqrt(v2);
-  const double rate_now = std::max(2.0 * v, v + wall_speed) * dt_; // [m/step]
-  return automatic_skin_m(used_m, step_ + 1 - step_at_build_, rate_now, largest);
 }
 
 void World::ensure_built() {
@@ -132,17 +118,7 @@ void World::rebuild(std::vector<std::uint32_t> candidates) {
     rmin = std::min(rmin, p_.radius[k]);
     rmax = std::max(rmax, p_.radius[k]);
   }
-  // The automatic skin: chosen when the last lists were used up, else kept;
-  // bounded by this rebuild's smallest radius (engine/verlet_skin.hpp).
-  if (n == 0) {
-    skin_m_ = 0.0;
-  } else {
-    const double largest = 0.5 * rmin;
-    const double chosen = next_skin_m_ > 0 ? next_skin_m_ : skin_m_ > 0 ? skin_m_ : largest;
-    skin_m_ = std::clamp(chosen, largest / 16.0, largest);
-  }
-  next_skin_m_ = 0.0;
-  step_at_build_ = step_;
+  skin_cached_ = n ? 0.5 * rmin : 0.0;
   const double cut = skin() + cutoff_extra_;
   // Wrap periodic positions into the box (only here, so that image codes stay
   // valid between rebuilds).
@@ -419,25 +395,15 @@ void World::rebuild(std::vector<std::uint32_t> candidates) {
 
 World::BuildState World::build_state() const {
   const bool pending = dirty_ || bb_.row_offset.size() != p_.size() + 1;
-  if (pending) return {true, {}, {}, {}, cutoff_extra_, skin_m_, next_skin_m_, step_at_build_};
-  return {false,
-          position_at_build_,
-          wall_point_at_build_,
-          wall_motion_since_build_,
-          cutoff_extra_,
-          skin_m_,
-          0.0,
-          step_at_build_};
+  if (pending) return {true, {}, {}, {}, cutoff_extra_};
+  return {false, position_at_build_, wall_point_at_build_, wall_motion_since_build_, cutoff_extra_};
 }
 
 void World::restore_build_state(const BuildState& s) {
   // The cutoff grows with every property set ever registered; the resumed
   // World may not have seen them all.
   cutoff_extra_ = std::max(cutoff_extra_, s.cutoff_extra_m);
-  skin_m_ = s.skin_m;
-  step_at_build_ = s.step_at_build;
   if (s.pending) {
-    next_skin_m_ = s.next_skin_m;
     dirty_ = true;
     return;
   }
@@ -459,7 +425,6 @@ void World::restore_build_state(const BuildState& s) {
   }
   p_.position = s.positions;
   rebuild_sorted();
-  step_at_build_ = s.step_at_build;
   if (p_.id != ids) {
     // Not expected (the sort leaves sorted particles in place); should it
     // happen, the run goes on correctly, in the new order (not bit for bit).

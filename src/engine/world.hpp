@@ -25,9 +25,7 @@ struct WorldSettings {
   double timestep_safety_factor = 0.8; // automatic dt = factor x critical estimate [-]
   double timestep_growth_limit = 0.05; // automatic dt grows at most this fraction per step [-]
   int timestep_update_interval = 100;  // steps between critical-timestep estimates
-  // Verlet skin [m]; 0 = automatic: chosen at each rebuild from the motion since
-  // the last one, between 1/32 and 1/2 of the smallest radius (engine/verlet_skin.hpp).
-  double neighbour_skin_m = 0.0;
+  double neighbour_skin_m = 0.0;       // Verlet skin; 0 = half the smallest radius [m]
   double max_overlap_fraction =
       0.5; // instability guard: overlap / smaller radius [-] (> 0; > 1 tolerates deep overlaps)
   int threads = 0; // OpenMP threads; 0 = the OpenMP default
@@ -217,7 +215,6 @@ public:
   std::size_t bytes_per_particle() const; // all engine storage / particles
   std::size_t neighbour_entries() const { return bb_.entries(); }
   long neighbour_rebuilds() const { return rebuilds_; }
-  double neighbour_skin_m() const { return skin(); } // the lists' Verlet skin [m]
   // Wall-clock seconds `cycle` has spent in each phase since construction:
   // the neighbour search (rebuilds and re-sorts, with the timestep estimate
   // after them), the contact pass, and the integration (forces gathered,
@@ -248,9 +245,6 @@ public:
     std::vector<Vec3> wall_points; // wall reference points at the last rebuild [m]
     std::vector<Vec3> wall_motion; // wall displacement since the last rebuild [m]
     double cutoff_extra_m = 0;     // largest attraction range of any property set so far [m]
-    double skin_m = 0;             // automatic skin of the last rebuild; 0: none yet [m]
-    double next_skin_m = 0;        // automatic skin chosen for the pending rebuild; 0: none [m]
-    long step_at_build = 0;        // step of the last rebuild
   };
   BuildState build_state() const;
   // Rebuilds the lists from `s` (call after the particles, walls and
@@ -294,7 +288,6 @@ private:
   void update_timestep(bool force_estimate);
   std::uint16_t register_properties(const ContactProperties& p);
   double skin() const;
-  double next_automatic_skin(double used_m) const; // engine/verlet_skin.hpp
 
   WorldSettings settings_;
   ParticleStore p_;
@@ -329,12 +322,7 @@ private:
     std::vector<double> end2_share, row_sum;
     std::vector<std::uint8_t> row_any;
   } timestep_scratch_;
-  // Automatic skin (WorldSettings::neighbour_skin_m = 0): that of the lists;
-  // the one chosen for the pending rebuild (0: none, keep skin_m_); the step of
-  // the last rebuild.
-  double skin_m_ = 0;      // [m]
-  double next_skin_m_ = 0; // [m]
-  long step_at_build_ = 0;
+  double skin_cached_ = 0; // automatic skin at the last rebuild [m]
   // Instability report from the contact pass (first offending entry).
   std::uint32_t unstable_entry_ = UINT32_MAX;
 };

@@ -119,7 +119,6 @@ void write_checkpoint(const World& world, const std::string& path,
   const World::BuildState b = world.build_state();
   w.pod(static_cast<std::uint8_t>(b.pending ? 1 : 0));
   w.vec(b.positions), w.vec(b.wall_points), w.vec(b.wall_motion), w.pod(b.cutoff_extra_m);
-  w.pod(b.skin_m), w.pod(b.next_skin_m), w.pod(static_cast<std::int64_t>(b.step_at_build));
   w.str(procedure_state);
 
   std::string payload = std::move(w.data());
@@ -162,7 +161,7 @@ LoadedCheckpoint read_checkpoint(World& world, const std::string& path) {
   std::memcpy(&version, file.data() + 8, 4);
   std::memcpy(&length, file.data() + 12, 8);
   std::memcpy(&sum, file.data() + 20, 8);
-  if (version < 4 || version > kCheckpointVersion)
+  if (version != kCheckpointVersion && version != 4)
     throw InputError("checkpoint", "\"" + path + "\"",
                      fmt::format("format version {} is not supported (this build reads 4 to {})",
                                  version, kCheckpointVersion));
@@ -225,15 +224,9 @@ LoadedCheckpoint read_checkpoint(World& world, const std::string& path) {
   }
   world.restore_contacts(r.vec<ContactRecord>());
   World::BuildState b;
-  b.step_at_build = clock.step; // versions 4 and 5 do not store it
   b.pending = r.pod<std::uint8_t>() != 0;
   b.positions = r.vec<Vec3>(), b.wall_points = r.vec<Vec3>(), b.wall_motion = r.vec<Vec3>();
   b.cutoff_extra_m = r.pod<double>();
-  if (version >= 6) { // older files: the skin of their time, half the smallest radius
-    b.skin_m = r.pod<double>();
-    b.next_skin_m = r.pod<double>();
-    b.step_at_build = static_cast<long>(r.pod<std::int64_t>());
-  }
   LoadedCheckpoint out;
   out.procedure_state = r.str();
   if (!r.done()) r.fail("trailing bytes");

@@ -19,10 +19,9 @@ namespace centridem {
 
 class World;
 
-// 3: the neighbour-list state; 4: servo integral; 5: ball-ball defaults graded by height; 6: the
-// automatic Verlet skin (versions 4 and 5 are still read: no grading, and the skin they were
-// written with, half the smallest radius, until the next rebuild chooses one)
-inline constexpr unsigned kCheckpointVersion = 6;
+// 3: the neighbour-list state; 4: servo integral; 5: ball-ball defaults graded by height (a
+// version-4 file is still read: it has no grading)
+inline constexpr unsigned kCheckpointVersion = 5;
 
 // FNV-1a, 64 bit: the checkpoint checksum (detects flipped bytes; with the
 // stored length, truncation); also a cache key for recipes.

@@ -465,7 +465,7 @@ SimulationSpec read_simulation(const toml::table* t, const std::string& default_
   w.local_damping = number(*t, p, "local_damping", w.local_damping, unit_open,
                            "the local damping coefficient alpha: in [0, 1) [-]");
   w.neighbour_skin_m = number(*t, p, "neighbour_skin_m", w.neighbour_skin_m, non_negative,
-                              "the Verlet skin: >= 0 [m] (0 = automatic, from the motion)");
+                              "the Verlet skin: >= 0 [m] (0 = half the smallest radius)");
   w.max_overlap_fraction = number(*t, p, "max_overlap_fraction", w.max_overlap_fraction, positive,
                                   "the instability guard, overlap / smaller radius: > 0 [-]");
   if (auto v = opt_integer(
@@ -955,7 +955,7 @@ std::string resolved_toml(const Scenario& s) {
   o += fmt::format("timestep_growth_limit = {}\n", num(w.timestep_growth_limit));
   o += fmt::format("timestep_update_interval = {}\n", w.timestep_update_interval);
   o += fmt::format("local_damping = {}\n", num(w.local_damping));
-  o += fmt::format("neighbour_skin_m = {}  # 0 = automatic, from the motion\n",
+  o += fmt::format("neighbour_skin_m = {}  # 0 = half the smallest radius\n",
                    num(w.neighbour_skin_m));
   o += fmt::format("max_overlap_fraction = {}\n", num(w.max_overlap_fraction));
   o += fmt::format("threads = {}  # 0 = the OpenMP default\n", w.threads);

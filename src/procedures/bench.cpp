@@ -98,7 +98,6 @@ BenchResult run_bench(const BenchOptions& o, int threads) {
       static_cast<double>(world.neighbour_entries()) / static_cast<double>(r.particles);
   r.bytes_per_particle = world.bytes_per_particle();
   r.rebuilds = world.neighbour_rebuilds() - rebuilds_before;
-  r.skin_m = world.neighbour_skin_m();
   r.particle_steps_per_s =
       static_cast<double>(r.particles) * static_cast<double>(o.steps) / r.wall_seconds;
   if (r.wall_seconds > 0) {

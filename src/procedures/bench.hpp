@@ -46,7 +46,6 @@ struct BenchResult {
   double neighbours_per_particle = 0;
   std::size_t bytes_per_particle = 0;
   long rebuilds = 0;
-  double skin_m = 0; // the Verlet skin of the lists at the end [m]
   double particle_steps_per_s = 0;
   // Shares of the timed steps' wall time [-].
   double share_neighbour_search = 0, share_contact_pass = 0, share_integration = 0;

@@ -3,7 +3,6 @@
 #include "engine/world.hpp"
 #include "procedures/paper_material.hpp"
 
-#include <algorithm>
 #include <cmath>
 #include <gtest/gtest.h>
 #include <random>
@@ -66,30 +65,11 @@ TEST(Servo, LidHoldsTargetStress) {
 // proportional servo (PFC's form) can only move while it sees an error: it
 // lags by F_lag = v (sum kn) dt / alpha, the error that commands the speed v.
 // The integral term (Ti > 0) removes that steady error.
-//
-// KNOWN FRAGILE (2026-12-04, issue 18): on this random layer the mean error
-// over the 10,000 steps below moves with the last bits of the run. With the
-// neighbour skin fixed at 10, 20, 30, 50 and 76 um, or automatic, the P error came out at
-// -0.35 to 1.26 of the lag and the PI error at -0.6 to 0.25 of P's (200
-// samples; 800 samples: 0.33-0.93 and -0.18 to 0.25), so whether the
-// assertions hold depends on the round-off of the run, not on the servo. The
-// skin is therefore pinned to the one this test ran with before the
-// automatic skin (half the smallest radius), which reproduces its run bit for
-// bit. A layer whose lid force is free of that noise is still to be found (81
-// straight columns of equal spheres made the proportional servo overshoot).
 TEST(Servo, IntegralTermRemovesTheLagBehindAMovingSpecimen) {
   const double v = 0.05; // [m/s], floor sinking
-  const double skin_m = [] {
-    World probe;
-    WallServo unused;
-    lid_on_layer(probe, unused);
-    const auto& r = probe.particles().radius;
-    return 0.5 * *std::min_element(r.begin(), r.end());
-  }();
   auto mean_error_over_lag = [&](double integral_time_s) {
     WorldSettings s;
     s.local_damping = 0.7;
-    s.neighbour_skin_m = skin_m;
     World w(s);
     WallServo servo;
     servo.integral_time_s = integral_time_s;
