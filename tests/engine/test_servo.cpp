@@ -65,6 +65,17 @@ TEST(Servo, LidHoldsTargetStress) {
 // proportional servo (PFC's form) can only move while it sees an error: it
 // lags by F_lag = v (sum kn) dt / alpha, the error that commands the speed v.
 // The integral term (Ti > 0) removes that steady error.
+//
+// KNOWN FRAGILE (2026-12-04, issue 18): on this random layer the mean errors
+// over the 10,000 steps below move with the last bits of the run. With the
+// neighbour skin fixed at 10, 20, 30, 50 or 76 um, or chosen automatically (a
+// change tried that day and not kept), the P error came out at -0.35 to 1.26
+// of the lag and the PI error at -0.6 to 0.25 of P's (200 samples; 800: 0.33
+// to 0.93 and -0.18 to 0.25). It passes with the engine's default skin (half
+// the smallest radius); a change that moves the bits of this run can fail it
+// without touching the servo. Regular layers (81 straight columns, a
+// monolayer) made the proportional servo overshoot; a quieter layer is still
+// to be found.
 TEST(Servo, IntegralTermRemovesTheLagBehindAMovingSpecimen) {
   const double v = 0.05; // [m/s], floor sinking
   auto mean_error_over_lag = [&](double integral_time_s) {
