@@ -198,7 +198,8 @@ long unstable_step(const std::string& out) {
 // (30,000 times softer, as this test had it until 2026-12-04, the guard tripped within the
 // shearing or not depending on the last bits of the run: with the neighbour skin fixed at 20 and
 // 5 um it tripped, at 100 um and with an automatic skin tried that day it did not. 300,000 times
-// softer it tripped with all of them and with the engine as it is.)
+// softer it tripped with the automatic skin, 100 um, 20 um and the engine as it is; 5 um was not
+// tried at that softening.)
 TEST(Instability, ShearCommandExitsWith3AndKeepsAResumableCheckpoint) {
   testutil::TempDir dir("centridem_unstable_shear");
   std::ofstream(dir / "box.toml") << testutil::kSmallShearBox;
