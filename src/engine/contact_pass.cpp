@@ -326,9 +326,13 @@ template <bool Periodic> void World::compute_contacts_impl() {
     struct RowSums {
       Vec3 force, moment;
     };
+    // Without applied loads the sums start from the same +0.0 the arrays hold
+    // (applied_loads_), without reading them.
+    const bool applied = applied_loads_;
     auto start_row = [&](std::size_t i) {
-      return RowSums{P.mass[i] * field_.acceleration(x[i], v[i]) + P.applied_force[i],
-                     P.applied_moment[i]};
+      return applied ? RowSums{P.mass[i] * field_.acceleration(x[i], v[i]) + P.applied_force[i],
+                               P.applied_moment[i]}
+                     : RowSums{P.mass[i] * field_.acceleration(x[i], v[i]) + Vec3{}, Vec3{}};
     };
     auto add_staged = [&](RowSums& sum, const ContactStage& s, std::uint32_t& k,
                           std::uint32_t e_end) {

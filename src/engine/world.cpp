@@ -8,6 +8,7 @@
 #include "base/errors.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <chrono>
 #include <cmath>
 #include <fmt/format.h>
@@ -269,6 +270,14 @@ World::modify_ball_ball_contacts(const std::function<bool(std::size_t, std::size
 
 void World::cycle(long steps) {
   ensure_built();
+  // Any bit set counts, -0.0 included, so that skipping them adds the same
+  // zeros the arrays hold, bit for bit.
+  const auto set = [](const Vec3& a) {
+    return std::bit_cast<std::uint64_t>(a.x) | std::bit_cast<std::uint64_t>(a.y) |
+           std::bit_cast<std::uint64_t>(a.z);
+  };
+  applied_loads_ = std::any_of(p_.applied_force.begin(), p_.applied_force.end(), set) ||
+                   std::any_of(p_.applied_moment.begin(), p_.applied_moment.end(), set);
   if (settings_.timestep_s > 0) {
     const double crit = critical_timestep();
     if (settings_.timestep_s > crit)

@@ -323,6 +323,10 @@ private:
     std::vector<std::uint8_t> row_any;
   } timestep_scratch_;
   double skin_cached_ = 0; // automatic skin at the last rebuild [m]
+  // Whether any particle carries an applied force or moment, found at the
+  // start of each cycle() call (the store changes only between calls): when
+  // none does, the contact pass does not stream the two arrays of zeros.
+  bool applied_loads_ = true;
   // Instability report from the contact pass (first offending entry).
   std::uint32_t unstable_entry_ = UINT32_MAX;
 };
