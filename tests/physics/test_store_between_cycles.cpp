@@ -47,5 +47,41 @@ TEST(PhysicsStoreBetweenCycles, BallMovedAndGrownBetweenCallsIsFeltAtTheNextStep
   EXPECT_EQ(w.neighbour_rebuilds(), rebuilds);
 }
 
+// The contact pass skips the applied-load arrays while they hold only +0.0,
+// found at the start of each cycle() call (2026-12-05, issue 18). Loads set,
+// changed and removed between calls must be felt at the next step. Closed
+// form: a free sphere without gravity gains v = F dt / m and w = M dt / I per
+// step (central differences), and keeps them once the loads are gone.
+TEST(PhysicsStoreBetweenCycles, AppliedLoadsSetAndRemovedBetweenCallsAreFeltAtTheNextStep) {
+  constexpr double R = 1e-3, rho = 2650, dt = 1e-6;
+  WorldSettings s;
+  s.threads = 1;
+  s.timestep_s = dt;
+  World w(s);
+  w.set_ball_ball_defaults(props(ContactModel::linear, 1e8, 0.5));
+  w.add_particle({0, 0, 0}, R, rho, 0, 1);
+  w.cycle(3); // no loads: at rest
+  ASSERT_EQ(norm(w.particles().velocity[0]), 0.0);
+  const double m = w.particles().mass[0], I = w.particles().inertia[0];
+  const Vec3 F{1e-3, -2e-3, 0}, M{0, 0, 3e-9};
+  w.particles_mut().applied_force[0] = F;
+  w.particles_mut().applied_moment[0] = M;
+  w.cycle(2);
+  EXPECT_LT(rel(w.particles().velocity[0], 2 * dt / m * F, 2 * dt / m * norm(F)), 1e-12);
+  EXPECT_LT(rel(w.particles().spin[0], 2 * dt / I * M, 2 * dt / I * norm(M)), 1e-12);
+  EXPECT_LT(rel(w.particles().force[0], F, norm(F)), 1e-15);
+  // Only the moment left: the velocity stays, the spin keeps growing.
+  w.particles_mut().applied_force[0] = {};
+  w.cycle(1);
+  EXPECT_LT(rel(w.particles().velocity[0], 2 * dt / m * F, 2 * dt / m * norm(F)), 1e-12);
+  EXPECT_LT(rel(w.particles().spin[0], 3 * dt / I * M, 3 * dt / I * norm(M)), 1e-12);
+  EXPECT_EQ(norm(w.particles().force[0]), 0.0);
+  // Both gone: nothing changes.
+  w.particles_mut().applied_moment[0] = {};
+  w.cycle(1);
+  EXPECT_LT(rel(w.particles().spin[0], 3 * dt / I * M, 3 * dt / I * norm(M)), 1e-12);
+  EXPECT_EQ(norm(w.particles().moment[0]), 0.0);
+}
+
 } // namespace
 } // namespace centridem
