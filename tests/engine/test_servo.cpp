@@ -10,9 +10,10 @@
 using namespace centridem;
 
 namespace {
-// A 648-sphere layer in a 4 mm x 4 mm box, floor at z = 0, a servo lid on top.
-// Returns the lid's index; `servo` gets the target and direction.
-std::size_t lid_on_layer(World& w, WallServo& servo) {
+// The paper's dry sand in a 4 mm x 4 mm box (floor at z = 0, four sides) and
+// a servo lid at height lid_z_m, its target 100 kPa on the lid = 1.6 N;
+// returns the lid's index; `servo` gets the target and direction.
+std::size_t box_with_servo_lid(World& w, WallServo& servo, double lid_z_m) {
   w.set_ball_ball_defaults(paper::ball_ball(0.0));
   const double L = 0.004;
   for (auto [name, p, nrm] : {std::tuple{"floor", Vec3{0, 0, 0}, Vec3{0, 0, 1}},
@@ -22,7 +23,19 @@ std::size_t lid_on_layer(World& w, WallServo& servo) {
                               std::tuple{"y1", Vec3{0, L, 0}, Vec3{0, -1, 0}}})
     w.add_wall(Wall::plane(name, p, nrm), paper::ball_wall());
   const std::size_t lid =
-      w.add_wall(Wall::plane("lid", {0, 0, 0.0036}, {0, 0, -1}), paper::ball_wall());
+      w.add_wall(Wall::plane("lid", {0, 0, lid_z_m}, {0, 0, -1}), paper::ball_wall());
+  servo.active = true;
+  servo.direction = {0, 0, -1};
+  servo.target_force_N = 100e3 * L * L;
+  servo.max_speed_m_per_s = 0.5;
+  w.set_wall_servo(lid, servo);
+  return lid;
+}
+
+// A 648-sphere random layer under the lid. No gravity, so the floor carries
+// the lid's force once the layer is in equilibrium.
+std::size_t lid_on_layer(World& w, WallServo& servo) {
+  const std::size_t lid = box_with_servo_lid(w, servo, 0.0036);
   std::mt19937_64 rng(5);
   std::uniform_real_distribution<double> rr(1.5e-4, 2.0e-4);
   const double a = 4.4e-4;
@@ -30,13 +43,6 @@ std::size_t lid_on_layer(World& w, WallServo& servo) {
     for (int iy = 0; iy < 9; ++iy)
       for (int ix = 0; ix < 9; ++ix)
         w.add_particle({(ix + 0.55) * a, (iy + 0.55) * a, (iz + 0.55) * a}, rr(rng), 2633);
-  // Target: 100 kPa on the 4 mm x 4 mm lid = 1.6 N; no gravity, so the floor
-  // carries the same force once the layer is in equilibrium.
-  servo.active = true;
-  servo.direction = {0, 0, -1};
-  servo.target_force_N = 100e3 * L * L;
-  servo.max_speed_m_per_s = 0.5;
-  w.set_wall_servo(lid, servo);
   return lid;
 }
 } // namespace
@@ -76,24 +82,10 @@ TEST(Servo, LidHoldsTargetStress) {
 // gives 1.000 and 1e-13 N with the default skin and with 20 um.)
 namespace {
 std::size_t lid_on_monolayer(World& w, WallServo& servo) {
-  w.set_ball_ball_defaults(paper::ball_ball(0.0));
-  const double L = 0.004;
-  for (auto [name, p, nrm] : {std::tuple{"floor", Vec3{0, 0, 0}, Vec3{0, 0, 1}},
-                              std::tuple{"x0", Vec3{0, 0, 0}, Vec3{1, 0, 0}},
-                              std::tuple{"x1", Vec3{L, 0, 0}, Vec3{-1, 0, 0}},
-                              std::tuple{"y0", Vec3{0, 0, 0}, Vec3{0, 1, 0}},
-                              std::tuple{"y1", Vec3{0, L, 0}, Vec3{0, -1, 0}}})
-    w.add_wall(Wall::plane(name, p, nrm), paper::ball_wall());
   const double r = 1.75e-4, a = 4.4e-4; // spacing a > 2 r: the spheres never touch
-  const std::size_t lid =
-      w.add_wall(Wall::plane("lid", {0, 0, 2 * r + 5e-5}, {0, 0, -1}), paper::ball_wall());
+  const std::size_t lid = box_with_servo_lid(w, servo, 2 * r + 5e-5);
   for (int iy = 0; iy < 3; ++iy)
     for (int ix = 0; ix < 3; ++ix) w.add_particle({(ix + 3.55) * a, (iy + 3.55) * a, r}, r, 2633);
-  servo.active = true;
-  servo.direction = {0, 0, -1};
-  servo.target_force_N = 100e3 * L * L; // as on the layer above: 1.6 N
-  servo.max_speed_m_per_s = 0.5;
-  w.set_wall_servo(lid, servo);
   return lid;
 }
 } // namespace
