@@ -120,7 +120,8 @@ void World::update_timestep(bool force_estimate) {
     // check the fixed timestep on the automatic one's step interval. Not
     // after every rebuild as well (until 2026-12-05): a rebuild does not
     // stiffen a contact, and on the flowing benchmark, which rebuilds every
-    // ~90 steps, those checks were 0.7 % of the run (issue 18). The first
+    // ~90 steps, dropping those checks made the run 1.7 % faster (issue 18,
+    // docs/results/bench.md). The first
     // step of a run is checked by cycle() itself.
     if (step_ % settings_.timestep_update_interval == 0) {
       const double crit = critical_timestep();
