@@ -30,13 +30,15 @@ int run_bench_command(const BenchOptions& o) {
         "law: {}\nworkload: {}\nthreads: {}\nparticles: {}\nsteps: {}\nwall_seconds: {:.3f}\n"
         "contacts_per_particle: {:.3f}\nball_ball_contacts_per_particle: {:.3f}\n"
         "neighbour_entries_per_particle: {:.3f}\n"
-        "bytes_per_particle: {}\nneighbour_rebuilds: {}\nparticle_steps_per_s: {:.4g}\n"
+        "bytes_per_particle: {}\nskin_m: {:.4g}\nneighbour_rebuilds: {}\n"
+        "particle_steps_per_s: {:.4g}\n"
         "time_share_neighbour_search: {:.3f}\ntime_share_contact_pass: {:.3f}\n"
         "time_share_integration: {:.3f}\nopenmp_wait: {}\n\n",
         to_string(o.law), to_string(o.workload), r.threads, r.particles, r.steps, r.wall_seconds,
         r.contacts_per_particle, r.ball_ball_contacts_per_particle, r.neighbours_per_particle,
-        r.bytes_per_particle, r.rebuilds, r.particle_steps_per_s, r.share_neighbour_search,
-        r.share_contact_pass, r.share_integration, cli::openmp_wait_in_use());
+        r.bytes_per_particle, r.skin_m, r.rebuilds, r.particle_steps_per_s,
+        r.share_neighbour_search, r.share_contact_pass, r.share_integration,
+        cli::openmp_wait_in_use());
     std::fflush(stdout);
   }
   return 0;
@@ -120,6 +122,11 @@ int main(int argc, char** argv) {
                                                {"flowing", BenchWorkload::flowing}},
           CLI::ignore_case))
       ->default_str("packed");
+  cmd_bench
+      ->add_option("--skin", bench.skin_m,
+                   "Verlet skin [m] (bench/peers' inputs use 5e-5); without it, the engine's "
+                   "default: half the smallest radius")
+      ->check(cli::positive_number(0.01));
 
   RunCommand run;
   add_generate_subcommand(app);  // runs itself from its callback

@@ -215,6 +215,9 @@ public:
   std::size_t bytes_per_particle() const; // all engine storage / particles
   std::size_t neighbour_entries() const { return bb_.entries(); }
   long neighbour_rebuilds() const { return rebuilds_; }
+  // The Verlet skin of the lists [m]: neighbour_skin_m, or half the smallest
+  // radius at the last rebuild.
+  double skin() const;
   // Wall-clock seconds `cycle` has spent in each phase since construction:
   // the neighbour search (rebuilds and re-sorts, with the timestep estimate
   // after them), the contact pass, and the integration (forces gathered,
@@ -287,7 +290,6 @@ private:
   void integrate();
   void update_timestep(bool force_estimate);
   std::uint16_t register_properties(const ContactProperties& p);
-  double skin() const;
 
   WorldSettings settings_;
   ParticleStore p_;

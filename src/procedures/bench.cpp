@@ -56,6 +56,7 @@ BenchResult run_bench(const BenchOptions& o, int threads) {
   // grains must be free to fall (the dashpot dissipates at the contacts).
   s.local_damping = peers || flowing ? 0.0 : paper::local_damping;
   s.timestep_s = o.timestep_s;
+  s.neighbour_skin_m = o.skin_m;
   s.threads = threads;
   World world(s);
   world.particles_mut().reserve(records.size());
@@ -98,6 +99,7 @@ BenchResult run_bench(const BenchOptions& o, int threads) {
       static_cast<double>(world.neighbour_entries()) / static_cast<double>(r.particles);
   r.bytes_per_particle = world.bytes_per_particle();
   r.rebuilds = world.neighbour_rebuilds() - rebuilds_before;
+  r.skin_m = world.skin();
   r.particle_steps_per_s =
       static_cast<double>(r.particles) * static_cast<double>(o.steps) / r.wall_seconds;
   if (r.wall_seconds > 0) {

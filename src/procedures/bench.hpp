@@ -34,6 +34,9 @@ struct BenchOptions {
   BenchLaw law = BenchLaw::paper;
   BenchWorkload workload = BenchWorkload::packed;
   double flow_cut_x_m = 6.3e-3; // flowing: the grains with x + r at most this [m]
+  // Verlet skin [m] (`--skin`); 0 = the engine's default (half the smallest
+  // radius, 62.5 um on the shared packing). The peers' inputs use 5e-5.
+  double skin_m = 0.0;
 };
 
 struct BenchResult {
@@ -46,6 +49,7 @@ struct BenchResult {
   double neighbours_per_particle = 0;
   std::size_t bytes_per_particle = 0;
   long rebuilds = 0;
+  double skin_m = 0; // the skin the run used [m]
   double particle_steps_per_s = 0;
   // Shares of the timed steps' wall time [-].
   double share_neighbour_search = 0, share_contact_pass = 0, share_integration = 0;

@@ -60,6 +60,17 @@ bool has(const std::string& text, const std::string& what) {
   return text.find(what) != std::string::npos;
 }
 
+// Eight spheres of radius 0.2 mm on a cubic lattice of 1 mm (x, y, z in 1..2
+// mm): 12 pairs 1 mm apart (edges), 12 at sqrt(2) mm (face diagonals), 4 at
+// sqrt(3) mm; none touching.
+fs::path tiny_lattice(const fs::path& dir) {
+  std::ofstream f(dir / "tiny.xyzr");
+  for (int k = 0; k < 8; ++k)
+    f << 1e-3 * (1 + k % 2) << ' ' << 1e-3 * (1 + k / 2 % 2) << ' ' << 1e-3 * (1 + k / 4) << ' '
+      << 2e-4 << '\n';
+  return dir / "tiny.xyzr";
+}
+
 TEST(CommandLine, VersionIsPrinted) {
   TempDir dir("centridem_cli_version");
   const auto r = run_centridem({"--version"}, dir / "log");
@@ -273,18 +284,39 @@ TEST(CommandLine, OpenMPWaitsPassivelyBesideBusyTasksAndKeepsTheUsersSetting) {
   EXPECT_EQ(own.code, 0) << own.output;
   EXPECT_EQ(spin_count(own.output), "1234") << own.output;
   // The benchmark reports the wait it ran with.
-  {
-    std::ofstream f(dir / "tiny.xyzr");
-    for (int k = 0; k < 8; ++k)
-      f << 1e-3 * (1 + k % 2) << ' ' << 1e-3 * (1 + k / 2 % 2) << ' ' << 1e-3 * (1 + k / 4) << ' '
-        << 2e-4 << '\n';
-  }
-  const auto bench = run_centridem({"bench", "--packing", (dir / "tiny.xyzr").string(), "--steps",
+  const auto bench = run_centridem({"bench", "--packing", tiny_lattice(dir.path()).string(), "--steps",
                                     "2", "--warmup", "0", "--threads", "1"},
                                    dir / "log", 60, {"OMP_WAIT_POLICY", "GOMP_SPINCOUNT=1234"});
   EXPECT_EQ(bench.code, 0) << bench.output;
   EXPECT_TRUE(bench.output.find("openmp_wait: GOMP_SPINCOUNT=1234\n") != std::string::npos)
       << bench.output;
+}
+
+// `bench --skin` sets the reach of the neighbour lists: pairs within r_i + r_j
+// + skin are listed, so on the lattice the entry count steps from none (the
+// default skin, half the radius: reach 0.5 mm) to the 12 edges (reach 1.1 mm)
+// and then the 12 face diagonals too (reach 1.5 mm); 0 is refused.
+TEST(CommandLine, BenchSkinSetsTheReachOfTheNeighbourLists) {
+  TempDir dir("centridem_cli_bench_skin");
+  const std::string packing = tiny_lattice(dir.path()).string();
+  const auto entries = [&](std::vector<std::string> extra, const std::string& want_skin) {
+    std::vector<std::string> args{"bench",    "--packing", packing,     "--steps", "2",
+                                  "--warmup", "0",         "--threads", "1"};
+    args.insert(args.end(), extra.begin(), extra.end());
+    const auto r = run_centridem(args, dir / "log");
+    EXPECT_EQ(r.code, 0) << r.output;
+    EXPECT_TRUE(has(r.output, "skin_m: " + want_skin + "\n")) << r.output;
+    const std::string key = "neighbour_entries_per_particle: ";
+    const std::size_t at = r.output.find(key);
+    return at == std::string::npos ? -1.0 : std::stod(r.output.substr(at + key.size()));
+  };
+  EXPECT_DOUBLE_EQ(entries({}, "0.0001"), 0.0);
+  EXPECT_DOUBLE_EQ(entries({"--skin", "7e-4"}, "0.0007"), 12.0 / 8.0);
+  EXPECT_DOUBLE_EQ(entries({"--skin", "1.1e-3"}, "0.0011"), 24.0 / 8.0);
+  const auto zero = run_centridem({"bench", "--packing", packing, "--skin", "0"}, dir / "log");
+  EXPECT_EQ(zero.code, 2) << zero.output;
+  EXPECT_TRUE(has(zero.output, "--skin: 0 is not allowed: a number > 0 and <= 0.01"))
+      << zero.output;
 }
 
 } // namespace
