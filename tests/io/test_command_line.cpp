@@ -1,8 +1,9 @@
 // The command line a user meets first (issue 19): --version; an unknown subcommand or flag
 // refused with the nearest real one; ranges written as people write them; an output folder that
 // is a file refused with exit 2; `--set KEY=VALUE` and `--check` on run, generate, shear and
-// slope (the value lands in the resolved scenario, a misspelt key is named); and OpenMP's wait
-// chosen by the program (passive beside busy tasks) unless the environment sets one.
+// slope (the value lands in the resolved scenario, a misspelt key is named); OpenMP's wait
+// chosen by the program (passive beside busy tasks) unless the environment sets one; and the
+// benchmark's `--skin` (issue 18).
 #include "cli_test_util.hpp"
 
 #include <algorithm>
@@ -284,8 +285,8 @@ TEST(CommandLine, OpenMPWaitsPassivelyBesideBusyTasksAndKeepsTheUsersSetting) {
   EXPECT_EQ(own.code, 0) << own.output;
   EXPECT_EQ(spin_count(own.output), "1234") << own.output;
   // The benchmark reports the wait it ran with.
-  const auto bench = run_centridem({"bench", "--packing", tiny_lattice(dir.path()).string(), "--steps",
-                                    "2", "--warmup", "0", "--threads", "1"},
+  const auto bench = run_centridem({"bench", "--packing", tiny_lattice(dir.path()).string(),
+                                    "--steps", "2", "--warmup", "0", "--threads", "1"},
                                    dir / "log", 60, {"OMP_WAIT_POLICY", "GOMP_SPINCOUNT=1234"});
   EXPECT_EQ(bench.code, 0) << bench.output;
   EXPECT_TRUE(bench.output.find("openmp_wait: GOMP_SPINCOUNT=1234\n") != std::string::npos)
