@@ -121,8 +121,8 @@ void World::update_timestep(bool force_estimate) {
     // after every rebuild as well (until 2026-12-05): a rebuild does not
     // stiffen a contact, and on the flowing benchmark, which rebuilds every
     // ~90 steps, dropping those checks made the run 1.7 % faster (issue 18,
-    // docs/results/bench.md). The first
-    // step of a run is checked by cycle() itself.
+    // docs/results/bench.md). The first step of a run is checked by cycle()
+    // itself.
     if (step_ % settings_.timestep_update_interval == 0) {
       const double crit = critical_timestep();
       if (dt_ > crit)
