@@ -25,12 +25,17 @@ void World::integrate() {
   std::uint32_t bad = UINT32_MAX;
 
   int team = 1;
-#pragma omp parallel num_threads(thread_count(settings_, n))
+  const int threads = thread_count(settings_, n);
+  integration_split_.prepare(threads, n);
+  // Each thread a contiguous block of rows, moved towards equal measured time
+  // (engine/work_split.hpp; a row's sums do not depend on who makes them).
+#pragma omp parallel num_threads(threads) reduction(max : max_move2) reduction(min : bad)
   {
-#pragma omp single nowait
-    team = omp_get_num_threads();
-#pragma omp for schedule(static) reduction(max : max_move2) reduction(min : bad)
-    for (std::size_t i = 0; i < n; ++i) {
+    const int size = omp_get_num_threads(), me = omp_get_thread_num();
+    if (me == 0) team = size;
+    const double t_start = size > 1 ? omp_get_wtime() : 0.0;
+    const auto [first_row, end_row] = integration_split_.block(me, size, n);
+    for (std::size_t i = first_row; i < end_row; ++i) {
       // Own side was summed by compute_contacts; add the forces from the
       // contacts in which i is the second end (zero for non-touching entries).
       Vec3 f = P.force[i];
@@ -58,7 +63,9 @@ void World::integrate() {
         bad = std::min(bad, static_cast<std::uint32_t>(i));
       max_move2 = std::max(max_move2, norm2(P.position[i] - position_at_build_[i]));
     }
+    if (size > 1) integration_split_.record(me, omp_get_wtime() - t_start);
   }
+  integration_split_.rebalance();
   threads_used_ = team;
 
   if (bad != UINT32_MAX)
