@@ -303,7 +303,7 @@ template <bool Periodic> void World::compute_contacts_impl() {
         if (!contact_active(props[pr], overlap) || dist == 0.0) { // contact ends
           bb_.properties[e] = kNoContact;
           bb_.state[e] = ContactState{};
-          bb_.on_2[e] = {};
+          bb_.load_on_2(e) = {};
           continue;
         }
         bb_.properties[e] = pr;
@@ -344,7 +344,7 @@ template <bool Periodic> void World::compute_contacts_impl() {
         const std::uint32_t e = s.entry[k];
         const Vec3 f{s.fx[k], s.fy[k], s.fz[k]};
         bb_.state[e] = {{s.fsx[k], s.fsy[k], s.fsz[k]}, {s.mrx[k], s.mry[k], s.mrz[k]}};
-        bb_.on_2[e] = {f, {s.m2x[k], s.m2y[k], s.m2z[k]}};
+        bb_.load_on_2(e) = {f, {s.m2x[k], s.m2y[k], s.m2z[k]}};
         sum.force -= f;
         sum.moment -= Vec3{s.m1x[k], s.m1y[k], s.m1z[k]};
       }

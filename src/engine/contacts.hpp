@@ -30,9 +30,11 @@ struct BallBallContacts {
   std::vector<ContactState> state;       // history
   std::vector<std::uint8_t> image;       // periodic image code of j (empty if not periodic)
   // This step's force [N] and total moment [N m] on j (zero when not
-  // touching), side by side: the contact pass writes both and integrate()
-  // gathers both for j, one record per entry. The row owner i sums its own
-  // side directly.
+  // touching), side by side, one record per entry, stored in the order of
+  // the transpose (entry e's record is on_2[slot_of[e]]): the contact pass
+  // writes the touching entries' records where integrate() then reads every
+  // record of j in one sequential run, incoming_offset[j] .. [j + 1]. The
+  // row owner i sums its own side directly.
   struct LoadOn2 {
     Vec3 force, moment;
   };
@@ -40,10 +42,13 @@ struct BallBallContacts {
   // Transpose: for particle j, the entries in which it is the second end.
   std::vector<std::uint32_t> incoming_offset; // size n+1
   std::vector<std::uint32_t> incoming;        // entry indices
+  std::vector<std::uint32_t> slot_of;         // entry e's slot k in the transpose
+  const LoadOn2& load_on_2(std::uint32_t e) const { return on_2[slot_of[e]]; }
+  LoadOn2& load_on_2(std::uint32_t e) { return on_2[slot_of[e]]; }
 
   std::size_t entries() const { return other.size(); }
   static constexpr std::size_t bytes_per_entry() {
-    return sizeof(std::uint32_t) * 2 + sizeof(std::uint16_t) + sizeof(ContactState) +
+    return sizeof(std::uint32_t) * 3 + sizeof(std::uint16_t) + sizeof(ContactState) +
            sizeof(LoadOn2);
   }
 };

@@ -41,9 +41,8 @@ void World::integrate() {
       Vec3 f = P.force[i];
       Vec3 mo = P.moment[i];
       for (std::uint32_t k = bb_.incoming_offset[i]; k < bb_.incoming_offset[i + 1]; ++k) {
-        const std::uint32_t e = bb_.incoming[k];
-        f += bb_.on_2[e].force;
-        mo += bb_.on_2[e].moment;
+        f += bb_.on_2[k].force; // in transpose order: one sequential run
+        mo += bb_.on_2[k].moment;
       }
       P.force[i] = f;
       P.moment[i] = mo;
