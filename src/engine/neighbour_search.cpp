@@ -63,6 +63,21 @@ struct CellGrid {
   std::size_t count() const { return static_cast<std::size_t>(n[0] * n[1] * n[2]); }
 };
 
+// Sizes a list for a rebuild, keeping its storage where that is large enough
+// and at most a quarter larger. Growing, it takes the size and 1/16 more,
+// not the doubling `resize` would give (which, kept from rebuild to rebuild,
+// had the lists at 1.6 times their entries after a few rebuilds: 1,117
+// bytes per particle on the bench packing instead of 709). The contents are
+// not kept: every element is written by the rebuild.
+template <class V> void size_list(V& v, std::size_t size) {
+  if (size > v.capacity() || v.capacity() > size + size / 4 + 64) {
+    V fresh;
+    fresh.reserve(size + size / 16);
+    v.swap(fresh);
+  }
+  v.resize(size);
+}
+
 CellGrid make_grid(const std::vector<Vec3>& x, std::span<const std::uint32_t> which, double h,
                    const PeriodicBox& pb) {
   CellGrid g;
@@ -344,19 +359,19 @@ void World::rebuild(std::vector<std::uint32_t> candidates) {
   bb.row_offset = std::move(count);
   const std::size_t entries = bb.row_offset[n];
   const bool periodic = periodic_.any();
-  bb.other.resize(entries);
-  bb.properties.resize(entries);
-  bb.image.resize(periodic ? entries : 0);
-  bb.state.resize(entries);
-  bb.on_2.resize(entries);
+  size_list(bb.other, entries);
+  size_list(bb.properties, entries);
+  size_list(bb.image, periodic ? entries : 0);
+  size_list(bb.state, entries);
+  size_list(bb.on_2, entries);
   BallWallContacts bw = std::move(bw_);
   bw.row_offset = std::move(wall_count);
   const std::size_t wall_entries = bw.row_offset[n];
-  bw.wall.resize(wall_entries);
-  bw.ball.resize(wall_entries);
-  bw.properties.resize(wall_entries);
-  bw.state.resize(wall_entries);
-  bw.force_on_wall.resize(wall_entries);
+  size_list(bw.wall, wall_entries);
+  size_list(bw.ball, wall_entries);
+  size_list(bw.properties, wall_entries);
+  size_list(bw.state, wall_entries);
+  size_list(bw.force_on_wall, wall_entries);
 
   // Row starts into the pending wall list.
   std::vector<std::uint32_t> pend_wall_start(n + 1, 0);
@@ -410,8 +425,8 @@ void World::rebuild(std::vector<std::uint32_t> candidates) {
   for (std::size_t e = 0; e < entries; ++e) ++bb.incoming_offset[bb.other[e] + 1];
   std::partial_sum(bb.incoming_offset.begin(), bb.incoming_offset.end(),
                    bb.incoming_offset.begin());
-  bb.incoming.resize(entries);
-  bb.slot_of.resize(entries);
+  size_list(bb.incoming, entries);
+  size_list(bb.slot_of, entries);
   {
     std::vector<std::uint32_t> fill(bb.incoming_offset.begin(), bb.incoming_offset.end() - 1);
     for (std::size_t e = 0; e < entries; ++e) {
