@@ -265,8 +265,9 @@ template <bool Periodic> void World::compute_contacts_impl() {
   // cache lines stay with one core (chunks of 256 rows dealt in turn gave
   // 1.6x from 1 to 2 threads; contiguous blocks 1.9x). The blocks follow the
   // measured time of each (engine/work_split.hpp). The row owner i sums
-  // its own side and leaves the force and moment on j in the entry;
-  // integrate() gathers those in a fixed order. No two threads write the
+  // its own side and leaves the force and moment on j in the entry's record
+  // (stored in the transpose's order); integrate() gathers those in a fixed
+  // order. No two threads write the
   // same memory, and no sum depends on the thread count.
 #pragma omp parallel num_threads(threads) reduction(min : unstable)
   {
