@@ -1,0 +1,60 @@
+#!/usr/bin/env bash
+# Two or more centridem builds measured in alternating rounds on the same core(s), so that the
+# machine's slow spells fall on every build alike: one line per run, then each build's median and
+# its ratio to the first build, paired by round (the "before/after" tables of
+# docs/results/bench.md).
+#
+# Usage:  bash bench/interleave.sh [--cores 0] [--rounds 4] BIN_A BIN_B [...] -- BENCH ARGS
+#   e.g.  bash bench/interleave.sh /tmp/before/build/centridem ./build/centridem -- \
+#           --law peers --threads 1 --steps 2000
+#         bash bench/interleave.sh --cores 0,1 A B -- --law peers --threads 2 --steps 2000
+#         bash bench/interleave.sh A B -- --law peers --workload flowing --steps 10000 --warmup 0
+# Build the "before" from another commit with `git worktree add /tmp/before <rev>` and `make
+# build` there (the profile and link-time optimisation as `make build` gives them).
+set -euo pipefail
+
+cores=0
+rounds=4
+bins=()
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --cores) cores="$2"; shift 2 ;;
+    --rounds) rounds="$2"; shift 2 ;;
+    --) shift; break ;;
+    -h|--help) sed -n '2,13p' "${BASH_SOURCE[0]}" | sed 's/^# \{0,1\}//'; exit 0 ;;
+    *) bins+=("$1"); shift ;;
+  esac
+done
+case "$rounds" in ''|*[!0-9]*|0) echo "interleave.sh: --rounds needs a positive integer, got '$rounds'" >&2; exit 2 ;; esac
+[ "${#bins[@]}" -ge 2 ] || { echo "interleave.sh: give at least two centridem binaries, then -- and the bench arguments" >&2; exit 2; }
+for b in "${bins[@]}"; do
+  [ -x "$b" ] || { echo "interleave.sh: '$b' is not an executable" >&2; exit 2; }
+done
+
+vals="$(mktemp)"
+trap 'rm -f "$vals"' EXIT
+echo "interleave.sh: $(date -u '+%F %T') UTC, cores $cores, $rounds rounds, bench $*"
+for r in $(seq 1 "$rounds"); do
+  for i in "${!bins[@]}"; do
+    v="$(taskset -c "$cores" "${bins[$i]}" bench "$@" | awk '/^particle_steps_per_s:/{print $2}')"
+    [ -n "$v" ] || { echo "interleave.sh: '${bins[$i]} bench $*' gave no particle_steps_per_s" >&2; exit 1; }
+    echo "round $r: ${bins[$i]} $v"
+    echo "$i $r $v" >>"$vals"
+  done
+done
+python3 - "$vals" "${bins[@]}" <<'PY'
+import sys, statistics as st
+v = {}
+for line in open(sys.argv[1]):
+    i, r, x = line.split()
+    v.setdefault(int(i), {})[int(r)] = float(x)
+names = sys.argv[2:]
+for i, n in enumerate(names):
+    m = st.median(v[i].values())
+    if i == 0:
+        print(f"{n}: median {m:.4g} particle-steps/s")
+    else:
+        q = [v[i][r] / v[0][r] for r in sorted(v[0])]
+        print(f"{n}: median {m:.4g}; / first, paired by round: x{st.median(q):.3f} (" +
+              ", ".join(f"{x:.3f}" for x in q) + ")")
+PY
