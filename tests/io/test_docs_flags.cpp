@@ -33,6 +33,11 @@ const std::set<std::string> kOtherTools = {
     "--procs",
     "--codes",
     "--workdir", // bench/run_peers.sh
+    "--rounds",
+    "--cores",
+    "--bin",
+    "--packed-steps",
+    "--flow-steps", // bench/side_by_side.sh, bench/interleave.sh
 };
 
 std::set<std::string> flags_in(const std::string& text) {
