@@ -59,6 +59,7 @@ rec() { # key round value
 }
 
 echo "side_by_side.sh: $(date -u '+%F %T') UTC, $bin, $rounds rounds, load $(cut -d' ' -f1-3 /proc/loadavg)"
+echo "side_by_side.sh: $("$bin" bench "${pk[@]}" --steps 1 --warmup 0 --threads 1 | grep -E '^(cpu|simd):' | paste -sd' ')"
 for r in $(seq 1 "$rounds"); do
   rec c1 "$r" "$(cd_run 0 --law peers --threads 1 --steps "$psteps")"
   rec c1s "$r" "$(cd_run 0 --law peers --threads 1 --steps "$psteps" --skin 5e-5)"

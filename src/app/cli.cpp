@@ -1,7 +1,8 @@
 #include "app/cli.hpp"
 
 #include "app/jobs.hpp"
-#include "io/scenario.hpp" // did_you_mean
+#include "io/scenario.hpp"   // did_you_mean
+#include "physics/lanes.hpp" // ContactLanes
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
@@ -13,6 +14,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <fmt/format.h>
+#include <fstream>
 #include <sstream>
 #include <string_view>
 #include <unistd.h>
@@ -238,6 +240,21 @@ std::string openmp_wait_in_use() {
     if (const char* v = std::getenv(name))
       out += (out.empty() ? "" : " ") + std::string(name) + "=" + v;
   return out.empty() ? "libgomp default" : out;
+}
+
+std::string cpu_model() {
+  std::ifstream in("/proc/cpuinfo");
+  for (std::string line; std::getline(in, line);) {
+    if (line.rfind("model name", 0) != 0) continue;
+    const auto colon = line.find(':');
+    const auto first = line.find_first_not_of(" \t", colon == std::string::npos ? 0 : colon + 1);
+    if (colon != std::string::npos && first != std::string::npos) return line.substr(first);
+  }
+  return "unknown";
+}
+
+std::string simd_in_use() {
+  return fmt::format("{}, {} doubles", ContactLanes::arch_type::name(), ContactLanes::size);
 }
 
 void print_warnings(const std::vector<std::string>& warnings) {

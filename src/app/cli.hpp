@@ -70,6 +70,13 @@ void choose_openmp_wait(char** argv);
 // The wait in use, for reports: "OMP_WAIT_POLICY=passive GOMP_SPINCOUNT=3000", or
 // "libgomp default" when neither is set.
 std::string openmp_wait_in_use();
+// The CPU, for reports that give speeds: the "model name" of /proc/cpuinfo's
+// first processor ("unknown" where there is none). A speed, and a ratio to
+// another code's, depends on it (docs/results/bench.md: 1.86x LIGGGHTS on an
+// AMD EPYC, 1.61x on an Intel Xeon, the same source the same day).
+std::string cpu_model();
+// The lanes the contact law runs in, for the same reports: "avx512bw, 8 doubles".
+std::string simd_in_use();
 
 // Prints each "centridem: warning: ..." line to stderr (a scenario's
 // plausibility warnings: the run goes on).

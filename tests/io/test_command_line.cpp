@@ -5,6 +5,7 @@
 // chosen by the program (passive beside busy tasks) unless the environment sets one; and the
 // benchmark's `--skin` (issue 18).
 #include "cli_test_util.hpp"
+#include "physics/lanes.hpp"
 
 #include <algorithm>
 #include <atomic>
@@ -291,6 +292,28 @@ TEST(CommandLine, OpenMPWaitsPassivelyBesideBusyTasksAndKeepsTheUsersSetting) {
   EXPECT_EQ(bench.code, 0) << bench.output;
   EXPECT_TRUE(bench.output.find("openmp_wait: GOMP_SPINCOUNT=1234\n") != std::string::npos)
       << bench.output;
+}
+
+// A speed means little without the machine that made it: the benchmark names
+// the CPU (/proc/cpuinfo's model name, read here too) and the SIMD lanes the
+// contact law ran in (this build's ContactLanes).
+TEST(CommandLine, BenchNamesTheCpuAndTheSimdLanes) {
+  TempDir dir("centridem_cli_bench_cpu");
+  const auto bench = run_centridem({"bench", "--packing", tiny_lattice(dir.path()).string(),
+                                    "--steps", "2", "--warmup", "0", "--threads", "1"},
+                                   dir / "log");
+  ASSERT_EQ(bench.code, 0) << bench.output;
+  std::string model = "unknown";
+  std::ifstream cpuinfo("/proc/cpuinfo");
+  for (std::string line; std::getline(cpuinfo, line);)
+    if (line.rfind("model name", 0) == 0) {
+      model = line.substr(line.find_first_not_of(" \t", line.find(':') + 1));
+      break;
+    }
+  EXPECT_NE(bench.output.find("\ncpu: " + model + "\n"), std::string::npos) << bench.output;
+  const std::string simd = std::string("\nsimd: ") + centridem::ContactLanes::arch_type::name() +
+                           ", " + std::to_string(centridem::ContactLanes::size) + " doubles\n";
+  EXPECT_NE(bench.output.find(simd), std::string::npos) << simd << bench.output;
 }
 
 // `bench --skin` sets the reach of the neighbour lists: pairs within r_i + r_j
