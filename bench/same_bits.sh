@@ -7,7 +7,8 @@
 # Hashed: the column's final_state.csv and measurements.csv; the brick's brick.json (positions and
 # contact history, 17 digits) and the assembled specimen.xyzr.
 # Usage (from the repo root):  bash bench/same_bits.sh [./build/centridem]
-# 3f77657 (and every engine since 5da09e9): 5a22be9a25a8 and 7bd84ad5bbee.
+# 3f77657 to 7e0dd1a: 5a22be9a25a8 and 7bd84ad5bbee (the column's hash is the one bench.md
+# quotes for every engine since 5da09e9; the brick's was first taken on 3f77657).
 set -euo pipefail
 bin="${1:-./build/centridem}"
 [ -x "$bin" ] || { echo "same_bits.sh: '$bin' is not an executable (make build first)" >&2; exit 2; }

@@ -44,7 +44,7 @@ out="$(mktemp -d "${TMPDIR:-/tmp}/side_by_side.XXXXXX")"
 trap 'rm -rf "$out"' EXIT
 
 # centridem bench ... -> its particle_steps_per_s
-cd_run() { # cores, args...
+centridem_run() { # cores, args...
   local cores="$1"; shift
   taskset -c "$cores" "$bin" bench "${pk[@]}" "$@" | awk '/^particle_steps_per_s:/{print $2}'
 }
@@ -61,18 +61,18 @@ rec() { # key round value
 echo "side_by_side.sh: $(date -u '+%F %T') UTC, $bin, $rounds rounds, load $(cut -d' ' -f1-3 /proc/loadavg)"
 echo "side_by_side.sh: $("$bin" bench "${pk[@]}" --steps 1 --warmup 0 --threads 1 | grep -E '^(cpu|simd):' | paste -sd' ')"
 for r in $(seq 1 "$rounds"); do
-  rec c1 "$r" "$(cd_run 0 --law peers --threads 1 --steps "$psteps")"
-  rec c1s "$r" "$(cd_run 0 --law peers --threads 1 --steps "$psteps" --skin 5e-5)"
-  rec c2 "$r" "$(cd_run 0,1 --law peers --threads 2 --steps "$psteps")"
-  rec c2s "$r" "$(cd_run 0,1 --law peers --threads 2 --steps "$psteps" --skin 5e-5)"
-  rec paper "$r" "$(cd_run 0 --law paper --threads 1 --steps "$psteps")"
+  rec c1 "$r" "$(centridem_run 0 --law peers --threads 1 --steps "$psteps")"
+  rec c1s "$r" "$(centridem_run 0 --law peers --threads 1 --steps "$psteps" --skin 5e-5)"
+  rec c2 "$r" "$(centridem_run 0,1 --law peers --threads 2 --steps "$psteps")"
+  rec c2s "$r" "$(centridem_run 0,1 --law peers --threads 2 --steps "$psteps" --skin 5e-5)"
+  rec paper "$r" "$(centridem_run 0 --law paper --threads 1 --steps "$psteps")"
   mapfile -t pv < <(peer_run "$psteps" 200 "liggghts_rolling lammps")
   rec liggghts "$r" "${pv[0]}"
   rec lammps "$r" "${pv[1]}"
 done
 for r in $(seq 1 "$rounds"); do
-  rec f1 "$r" "$(cd_run 0 --law peers --workload flowing --threads 1 --steps "$fsteps" --warmup 0)"
-  rec f1s "$r" "$(cd_run 0 --law peers --workload flowing --threads 1 --steps "$fsteps" --warmup 0 --skin 5e-5)"
+  rec f1 "$r" "$(centridem_run 0 --law peers --workload flowing --threads 1 --steps "$fsteps" --warmup 0)"
+  rec f1s "$r" "$(centridem_run 0 --law peers --workload flowing --threads 1 --steps "$fsteps" --warmup 0 --skin 5e-5)"
   rec lammps_flow "$r" "$(peer_run "$fsteps" 0 lammps_flow)"
 done
 
@@ -84,9 +84,8 @@ for line in open(sys.argv[1]):
     vals.setdefault(k, {})[int(r)] = float(v)
 R = range(1, int(sys.argv[2]) + 1)
 def row(k): return [vals[k][r] for r in R]
-def med(x): return st.median(x)
-def show(x, e=True): return f"{med(x):.3e} (" + ", ".join(f"{v:.3g}" for v in x) + ")"
-def ratio(x): return f"**{med(x):.2f}** (" + ", ".join(f"{v:.2f}" for v in x) + ")"
+def show(x): return f"{st.median(x):.3e} (" + ", ".join(f"{v:.3g}" for v in x) + ")"
+def ratio(x): return f"**{st.median(x):.2f}** (" + ", ".join(f"{v:.2f}" for v in x) + ")"
 peer = [max(vals["liggghts"][r], vals["lammps"][r]) for r in R]
 print("\n| workload | centridem, default skin | centridem, `--skin 5e-5` | LIGGGHTS 1 process | LAMMPS 1 process | ratio to the faster peer per core (default / 5e-5), or 1 -> 2 thread speed-up |")
 print("|---|---|---|---|---|---|")
