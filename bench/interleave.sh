@@ -26,6 +26,7 @@ while [ $# -gt 0 ]; do
   esac
 done
 case "$rounds" in ''|*[!0-9]*|0) echo "interleave.sh: --rounds needs a positive integer, got '$rounds'" >&2; exit 2 ;; esac
+[[ $cores =~ ^[0-9]+([,-][0-9]+)*$ ]] || { echo "interleave.sh: --cores needs a CPU list such as 0 or 0,1 or 0-1 (taskset -c), got '$cores'" >&2; exit 2; }
 [ "${#bins[@]}" -ge 2 ] || { echo "interleave.sh: give at least two centridem binaries, then -- and the bench arguments" >&2; exit 2; }
 for b in "${bins[@]}"; do
   [ -x "$b" ] || { echo "interleave.sh: '$b' is not an executable" >&2; exit 2; }
