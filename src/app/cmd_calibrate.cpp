@@ -1,5 +1,6 @@
 #include "app/cmd_calibrate.hpp"
 
+#include "app/calibrate_evaluation.hpp"
 #include "app/cli.hpp"
 #include "app/cmd_shear.hpp"
 
@@ -36,7 +37,7 @@ using cli::seconds_since;
 namespace {
 
 std::string kpa(double Pa) {
-  return fmt::format("{:g}", Pa / 1e3);
+  return kpa_text(Pa);
 }
 
 // Every file the calibration writes is replaced whole (a temporary file
@@ -52,162 +53,6 @@ std::string read_text(const fs::path& path, const std::string& flag) {
                      "a calibration folder written by centridem calibrate (" + path.string() +
                          " missing)");
   return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
-
-// ---- the history of a stage: one CSV line per finished evaluation ----------
-
-std::vector<std::string> part_names(const CalibrationStage& st) {
-  std::vector<std::string> n;
-  switch (st.kind) {
-  case CalibrationTargetKind::curves:
-    for (double s : st.normal_stresses_Pa) n.push_back("misfit_at_" + kpa(s) + "kPa_kPa");
-    if (st.weights.height_kPa_per_um > 0)
-      for (double s : st.normal_stresses_Pa)
-        n.push_back("height_difference_at_" + kpa(s) + "kPa_um");
-    if (st.curves.front().unloading_modulus_Pa > 0)
-      for (double s : st.normal_stresses_Pa)
-        n.push_back("unloading_modulus_difference_at_" + kpa(s) + "kPa_percent");
-    if (st.curves.front().reloading_modulus_Pa > 0)
-      for (double s : st.normal_stresses_Pa)
-        n.push_back("reloading_modulus_difference_at_" + kpa(s) + "kPa_percent");
-    break;
-  case CalibrationTargetKind::peak_stresses:
-    for (double s : st.normal_stresses_Pa) n.push_back("peak_difference_at_" + kpa(s) + "kPa_kPa");
-    break;
-  case CalibrationTargetKind::mohr_coulomb:
-    n = {"friction_angle_difference_deg", "cohesion_difference_kPa"};
-    break;
-  }
-  return n;
-}
-
-std::string history_header(const CalibrationStage& st) {
-  std::string h = "evaluation";
-  for (const CalibrationParameter& p : st.parameters) h += "," + p.key;
-  h += st.kind == CalibrationTargetKind::mohr_coulomb ? ",misfit_deg_and_kPa" : ",misfit_kPa";
-  for (const std::string& n : part_names(st)) h += "," + n;
-  return h + ",wall_s,folder";
-}
-
-std::string history_line(const Evaluation& e) {
-  std::string l = std::to_string(e.index);
-  for (double v : e.values) l += fmt::format(",{:.17g}", v);
-  l += fmt::format(",{:.17g}", e.misfit);
-  for (double v : e.parts) l += fmt::format(",{:.17g}", v);
-  return l + fmt::format(",{:.3f},{}", e.wall_seconds, e.folder);
-}
-
-std::vector<Evaluation> read_history(const fs::path& path, const CalibrationStage& st) {
-  std::vector<Evaluation> h;
-  std::ifstream in(path);
-  if (!in) return h;
-  std::string line;
-  std::getline(in, line);
-  const std::string header = history_header(st);
-  if (std::string(trim_blanks(line)) != header)
-    throw InputError(path.string() + " line 1", "\"" + line + "\"",
-                     "the header \"" + header +
-                         "\" of this stage: the calibration changed since the history was "
-                         "written; start a new output folder");
-  const std::size_t np = st.parameters.size(), nparts = part_names(st).size();
-  long n = 1;
-  while (std::getline(in, line)) {
-    ++n;
-    if (trim_blanks(line).empty()) continue;
-    const std::vector<std::string_view> f = split_commas(line);
-    const std::string where = fmt::format("{} line {}", path.string(), n);
-    if (f.size() != np + nparts + 4)
-      throw InputError(where, "\"" + line + "\"",
-                       fmt::format("{} comma-separated fields", np + nparts + 4));
-    Evaluation e;
-    e.index = static_cast<int>(parse_finite_number(f[0], where + " column 1"));
-    if (e.index != static_cast<int>(h.size()) + 1)
-      throw InputError(where, std::string(f[0]), fmt::format("evaluation {}", h.size() + 1));
-    for (std::size_t k = 0; k < np; ++k)
-      e.values.push_back(parse_finite_number(f[1 + k], fmt::format("{} column {}", where, k + 2)));
-    // An evaluation whose comparison failed is recorded as inf.
-    const std::string m(f[1 + np]);
-    e.misfit = m == "inf" ? std::numeric_limits<double>::infinity()
-                          : parse_finite_number(f[1 + np], where + " (misfit)");
-    for (std::size_t k = 0; k < nparts; ++k) {
-      const std::string v(f[2 + np + k]);
-      e.parts.push_back(v == "inf" ? std::numeric_limits<double>::infinity()
-                                   : parse_finite_number(f[2 + np + k], where));
-    }
-    e.wall_seconds = parse_finite_number(f[2 + np + nparts], where + " (wall_s)");
-    e.folder = std::string(f[3 + np + nparts]);
-    h.push_back(std::move(e));
-  }
-  return h;
-}
-
-// ---- one evaluation: a shear run folder and its comparison ---------------
-
-SimulatedCurve simulated_curve(const fs::path& run, double sigma) {
-  const fs::path p = run / (shear_run_stem(sigma) + ".json");
-  std::ifstream in(p);
-  if (!in) throw std::runtime_error("missing shear result " + p.string());
-  const nlohmann::json j = nlohmann::json::parse(in);
-  SimulatedCurve c;
-  c.normal_stress_Pa = sigma;
-  c.consolidated_height_m = j.at("consolidated_height_m").get<double>();
-  if (j.contains("unload_reload")) {
-    c.unloading_modulus_Pa = j.at("unload_reload").at("unloading_modulus_Pa").get<double>();
-    c.reloading_modulus_Pa = j.at("unload_reload").at("reloading_modulus_Pa").get<double>();
-  }
-  for (const auto& q : j.at("curve_strain_tau_dz")) {
-    const double e = q[0].get<double>();
-    if (!c.strain.empty() && !(e > c.strain.back())) continue; // keep the strains rising
-    c.strain.push_back(e);
-    c.shear_stress_Pa.push_back(q[1].get<double>());
-    c.vertical_displacement_m.push_back(q[2].get<double>());
-  }
-  return c;
-}
-
-// Compares a finished run folder with the stage's target.
-void compare(const CalibrationStage& st, const fs::path& run, Evaluation& e) {
-  e.parts.clear();
-  switch (st.kind) {
-  case CalibrationTargetKind::curves: {
-    std::vector<CurveMisfit> per;
-    for (const MeasuredCurve& m : st.curves) {
-      per.push_back(curve_misfit(m, simulated_curve(run, m.normal_stress_Pa), st.weights));
-      e.parts.push_back(per.back().total_Pa / 1e3);
-    }
-    if (st.weights.height_kPa_per_um > 0)
-      for (const CurveMisfit& m : per) e.parts.push_back(m.height_difference_m * 1e6);
-    if (st.curves.front().unloading_modulus_Pa > 0)
-      for (const CurveMisfit& m : per) e.parts.push_back(m.unloading_modulus_difference * 100);
-    if (st.curves.front().reloading_modulus_Pa > 0)
-      for (const CurveMisfit& m : per) e.parts.push_back(m.reloading_modulus_difference * 100);
-    e.misfit = overall_misfit(per) / 1e3;
-    break;
-  }
-  case CalibrationTargetKind::peak_stresses: {
-    std::vector<double> peaks;
-    for (std::size_t k = 0; k < st.normal_stresses_Pa.size(); ++k) {
-      const SimulatedCurve c = simulated_curve(run, st.normal_stresses_Pa[k]);
-      peaks.push_back(*std::max_element(c.shear_stress_Pa.begin(), c.shear_stress_Pa.end()));
-      e.parts.push_back((peaks.back() - st.peak_shear_stress_Pa[k]) / 1e3);
-    }
-    e.misfit = peak_stress_misfit(st.peak_shear_stress_Pa, peaks) / 1e3;
-    break;
-  }
-  case CalibrationTargetKind::mohr_coulomb: {
-    std::vector<double> peaks;
-    for (double s : st.normal_stresses_Pa) {
-      const SimulatedCurve c = simulated_curve(run, s);
-      peaks.push_back(*std::max_element(c.shear_stress_Pa.begin(), c.shear_stress_Pa.end()));
-    }
-    const MohrCoulombFit f = fit_mohr_coulomb(st.normal_stresses_Pa, peaks);
-    const MohrCoulombMisfit m =
-        mohr_coulomb_misfit(st.mohr_coulomb, f.friction_angle_deg, f.cohesion_Pa);
-    e.parts = {m.friction_angle_difference_deg, m.cohesion_difference_Pa / 1e3};
-    e.misfit = m.total;
-    break;
-  }
-  }
 }
 
 std::string values_text(const CalibrationStage& st, const std::vector<double>& v) {
@@ -266,7 +111,7 @@ void plot_curves(const CalibrationStage& st, const fs::path& run, const Evaluati
     bool any_dz = false;
     for (std::size_t k = 0; k < st.curves.size(); ++k) {
       const MeasuredCurve& m = st.curves[k];
-      const SimulatedCurve s = simulated_curve(run, m.normal_stress_Pa);
+      const SimulatedCurve s = evaluation_curve(st, run, m.normal_stress_Pa);
       auto pct = [](std::vector<double> v) {
         for (double& x : v) x *= 100;
         return v;
@@ -304,7 +149,7 @@ void plot_curves(const CalibrationStage& st, const fs::path& run, const Evaluati
   mc.y_label = "peak shear stress τ (kPa)";
   std::vector<double> s, tp;
   for (double sig : st.normal_stresses_Pa) {
-    const SimulatedCurve c = simulated_curve(run, sig);
+    const SimulatedCurve c = evaluation_curve(st, run, sig);
     s.push_back(sig / 1e3);
     tp.push_back(*std::max_element(c.shear_stress_Pa.begin(), c.shear_stress_Pa.end()) / 1e3);
   }
@@ -439,30 +284,45 @@ int run_calibrate_command(const CalibrateCommandOptions& o) {
       const auto te = Clock::now();
       const std::string name = fmt::format("eval_{:03d}", index);
       const fs::path run = dir / name;
-      ShearCommandOptions so;
-      so.jobs = o.jobs;
-      so.threads = o.threads;
-      so.progress_interval_s = 60;
-      so.resume_hint = false; // the calibration's own --resume is what continues it
-      if (fs::exists(run / "pressures.json")) {
-        so.resume_dir = run.string(); // an evaluation stopped half way
+      // One shear run (of the evaluation, or of one replicate): started,
+      // or continued where a stopped calibration left it.
+      auto shear = [&](const fs::path& folder, const fs::path& input,
+                       const std::vector<std::string>& replicate) {
+        ShearCommandOptions so;
+        so.jobs = o.jobs;
+        so.threads = o.threads;
+        so.progress_interval_s = 60;
+        so.resume_hint = false; // the calibration's own --resume is what continues it
+        if (fs::exists(folder / "pressures.json")) {
+          so.resume_dir = folder.string(); // stopped half way
+        } else {
+          fs::remove_all(folder);
+          const ShearScenario sc = stage_scenario(cal, st, earlier, values, replicate);
+          write_text(input, resolved_shear_toml(sc));
+          so.scenario = input.string();
+          so.out_dir = folder.string();
+        }
+        const int rc = run_shear_command(so);
+        if (rc > 128 || stop_signal())
+          throw Interrupted(rc > 128 ? rc - 128 : stop_signal(),
+                            "calibration stopped in evaluation " + std::to_string(index));
+        if (rc != 0)
+          throw std::runtime_error(fmt::format("evaluation {} ({}): a shear run failed (exit {})",
+                                               index, folder.string(), rc));
+      };
+      if (st.replicates.empty()) {
+        shear(run, dir / (name + ".toml"), {});
       } else {
-        fs::remove_all(run);
-        const ShearScenario sc = stage_scenario(cal, st, earlier, values);
-        const fs::path input = dir / (name + ".toml");
-        write_text(input, resolved_shear_toml(sc));
-        so.scenario = input.string();
-        so.out_dir = run.string();
+        make_directories(run.string());
+        for (std::size_t k = 0; k < st.replicates.size(); ++k) {
+          const fs::path folder = run / replicate_folder(k);
+          if (fs::exists(folder / "summary.json")) continue; // finished before a stop
+          shear(folder, run / (replicate_folder(k) + ".toml"), st.replicates[k]);
+        }
+        write_replicate_means(st, run);
       }
-      const int rc = run_shear_command(so);
-      if (rc > 128 || stop_signal())
-        throw Interrupted(rc > 128 ? rc - 128 : stop_signal(),
-                          "calibration stopped in evaluation " + std::to_string(index));
-      if (rc != 0)
-        throw std::runtime_error(fmt::format("evaluation {} ({}): a shear run failed (exit {})",
-                                             index, run.string(), rc));
       Evaluation e;
-      compare(st, run, e);
+      compare_with_target(st, run, e);
       e.wall_seconds = seconds_since(te);
       e.folder = fs::relative(run, out).generic_string();
       new_seconds += e.wall_seconds;

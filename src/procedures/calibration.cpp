@@ -27,6 +27,40 @@ double interpolate(const std::vector<double>& xs, const std::vector<double>& ys,
   return ys[k - 1] + w * (ys[k] - ys[k - 1]);
 }
 
+SimulatedCurve mean_of_replicates(const std::vector<SimulatedCurve>& replicates) {
+  if (replicates.empty()) throw std::invalid_argument("mean_of_replicates: no replicate");
+  const SimulatedCurve& first = replicates.front();
+  if (replicates.size() == 1) return first;
+  const double n = static_cast<double>(replicates.size());
+  SimulatedCurve m;
+  m.normal_stress_Pa = first.normal_stress_Pa;
+  double lo = -std::numeric_limits<double>::infinity();
+  double hi = std::numeric_limits<double>::infinity();
+  for (const SimulatedCurve& r : replicates) {
+    if (r.normal_stress_Pa != first.normal_stress_Pa)
+      throw std::invalid_argument("mean_of_replicates: replicates at different normal stresses");
+    m.consolidated_height_m += r.consolidated_height_m / n;
+    m.unloading_modulus_Pa += r.unloading_modulus_Pa / n;
+    m.reloading_modulus_Pa += r.reloading_modulus_Pa / n;
+    if (r.strain.empty()) return m; // nothing in common: no curve
+    lo = std::max(lo, r.strain.front());
+    hi = std::min(hi, r.strain.back());
+  }
+  for (std::size_t k = 0; k < first.strain.size(); ++k) {
+    const double e = first.strain[k];
+    if (e < lo || e > hi) continue;
+    double tau = 0, dz = 0;
+    for (const SimulatedCurve& r : replicates) {
+      tau += interpolate(r.strain, r.shear_stress_Pa, e);
+      dz += interpolate(r.strain, r.vertical_displacement_m, e);
+    }
+    m.strain.push_back(e);
+    m.shear_stress_Pa.push_back(tau / n);
+    m.vertical_displacement_m.push_back(dz / n);
+  }
+  return m;
+}
+
 CurveMisfit curve_misfit(const MeasuredCurve& measured, const SimulatedCurve& simulated,
                          const CurveWeights& weights) {
   CurveMisfit m;

@@ -51,6 +51,17 @@ struct SimulatedCurve {
   double reloading_modulus_Pa = 0;             // [Pa]
 };
 
+// The mean of replicate runs at one pressure (specimens of different seeds:
+// `seeds` in a calibration stage, docs/calibrate.md "Replicates"): the curve on
+// the first replicate's strains that every replicate reaches (each other one
+// linearly interpolated there), shear stress and vertical displacement
+// averaged; the consolidated heights and the loop's moduli averaged. The
+// mean of n replicates scatters sqrt(n) times less than one run. One replicate
+// is returned as it is. Throws std::invalid_argument for none, or for
+// replicates at different pressures. Replicates without a common strain range
+// give an empty curve (an infinite misfit).
+SimulatedCurve mean_of_replicates(const std::vector<SimulatedCurve>& replicates);
+
 // Optional terms beside the shear stress RMS.
 struct CurveWeights {
   double peak = 0;                    // weight of the squared peak difference [-]

@@ -29,6 +29,7 @@ const Keys kStageKeys = {"name",
                          "target",
                          "budget",
                          "restarts",
+                         "replicates",
                          "tolerance",
                          "peak_weight",
                          "dilation_weight_kPa_per_mm",
@@ -199,11 +200,13 @@ std::string parameter_override(const CalibrationParameter& p, double value) {
 
 ShearScenario stage_scenario(const CalibrationScenario& c, const CalibrationStage& stage,
                              const std::vector<std::string>& earlier,
-                             const std::vector<double>& values) {
+                             const std::vector<double>& values,
+                             const std::vector<std::string>& replicate) {
   std::vector<std::string> o = earlier;
   o.insert(o.end(), stage.set.begin(), stage.set.end());
   for (std::size_t k = 0; k < stage.parameters.size() && k < values.size(); ++k)
     o.push_back(parameter_override(stage.parameters[k], values[k]));
+  o.insert(o.end(), replicate.begin(), replicate.end());
   const std::string text = tomlread::apply_overrides(c.text, c.source, o);
   return parse_shear_scenario(text, c.source + " (stage " + stage.name + ")", c.base_dir);
 }
@@ -472,6 +475,27 @@ CalibrationScenario parse_calibration(std::string_view text, const std::string& 
             "a whole number in [0, 100]: how often BOBYQA may start again from the best point "
             "when it converges with budget left (noisy misfits)"))
       st.optimiser.restarts = static_cast<int>(*v);
+    if (const toml::node* rn = t.get("replicates")) {
+      const std::string allowed =
+          "a list of 1 to 64 replicate specimens, each a \"KEY = VALUE\" override or a list of "
+          "them, e.g. [\"specimen.seed = 11\", \"specimen.seed = 12\"] (docs/calibrate.md "
+          "\"Replicates\")";
+      const toml::array* a = rn->as_array();
+      if (!a || a->empty() || a->size() > 64) fail(P + ".replicates", *rn, allowed);
+      for (std::size_t k = 0; k < a->size(); ++k) {
+        const std::string key = fmt::format("{}.replicates[{}]", P, k + 1);
+        std::vector<std::string> o;
+        if (const toml::array* list = (*a)[k].as_array()) {
+          for (const toml::node& v : *list) o.push_back(tomlread::as_string(v, key, allowed));
+        } else {
+          o.push_back(tomlread::as_string((*a)[k], key, allowed));
+        }
+        if (o.empty()) fail(key, (*a)[k], allowed);
+        if (std::find(st.replicates.begin(), st.replicates.end(), o) != st.replicates.end())
+          fail(key, (*a)[k], "a replicate unlike the others (" + allowed + ")");
+        st.replicates.push_back(std::move(o));
+      }
+    }
     if (auto v = tomlread::opt_number(
             t, P, "tolerance", [](double x) { return x >= 0; },
             ">= 0, in the misfit's unit (kPa; degrees and kPa for a "
@@ -497,6 +521,15 @@ CalibrationScenario parse_calibration(std::string_view text, const std::string& 
     } catch (const InputError& e) {
       throw InputError(P + ".set", "[...]",
                        std::string("overrides that give a valid shear scenario: ") + e.what());
+    }
+    for (std::size_t k = 0; k < st.replicates.size(); ++k) {
+      try {
+        stage_scenario(c, st, earlier, {}, st.replicates[k]);
+      } catch (const InputError& e) {
+        throw InputError(fmt::format("{}.replicates[{}]", P, k + 1),
+                         "\"" + st.replicates[k].front() + "\"",
+                         std::string("overrides that give a valid shear scenario: ") + e.what());
+      }
     }
     for (std::size_t j = 0; j < st.parameters.size(); ++j) {
       std::vector<double> starts;

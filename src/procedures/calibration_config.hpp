@@ -31,7 +31,12 @@ struct CalibrationStage {
   CurveWeights weights;                     // kind curves
   OptimiserSettings optimiser;              // budget, tolerance
   std::vector<double> normal_stresses_Pa;   // the stage scenario's pressures, rising
-  std::string misfit_unit() const;          // "kPa" or "deg & kPa"
+  // Replicate specimens (`replicates`): each evaluation runs the shear test
+  // once per replicate, with that replicate's KEY = VALUE overrides applied
+  // last (another specimen.seed, another specimen.file), and compares the
+  // mean of the runs (mean_of_replicates); empty: one run.
+  std::vector<std::vector<std::string>> replicates;
+  std::string misfit_unit() const; // "kPa" or "deg & kPa"
 };
 
 struct CalibrationScenario {
@@ -54,9 +59,11 @@ std::string parameter_override(const CalibrationParameter& p, double value);
 
 // The shear scenario of a stage at the given parameter values, after the
 // overrides of the stages before it (`earlier`, KEY = VALUE lines).
+// `replicate`: one of the stage's replicates, whose overrides come last.
 ShearScenario stage_scenario(const CalibrationScenario& c, const CalibrationStage& stage,
                              const std::vector<std::string>& earlier,
-                             const std::vector<double>& values);
+                             const std::vector<double>& values,
+                             const std::vector<std::string>& replicate = {});
 
 // Reads measured curves from a CSV file with a header naming its columns
 // (any order): shear_strain | shear_strain_percent | shear_displacement_mm |

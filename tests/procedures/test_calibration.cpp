@@ -10,9 +10,11 @@
 #include "cli_test_util.hpp"
 #include "scenario_fixtures.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 #include <string>
 
 using namespace centridem;
@@ -105,6 +107,53 @@ TEST(CalibrationMisfit, CurveAgainstHandComputedValues) {
   SimulatedCurve short_run = s;
   short_run.strain = {0.0, 0.001, 0.002};
   EXPECT_TRUE(std::isinf(curve_misfit(m, short_run, {}).total_Pa));
+}
+
+// Replicates: two linear curves on offset strain grids; their mean on the
+// first one's strains that both reach is the mean of the two lines there.
+TEST(CalibrationMisfit, MeanOfReplicatesIsTheMeanCurveOnTheCommonStrains) {
+  SimulatedCurve a, b;
+  a.normal_stress_Pa = b.normal_stress_Pa = 50e3;
+  a.strain = {0.0, 0.01, 0.02, 0.03, 0.04}; // tau = 1e6 e, dz = 1e-4 e
+  for (double e : a.strain) {
+    a.shear_stress_Pa.push_back(1e6 * e);
+    a.vertical_displacement_m.push_back(1e-4 * e);
+  }
+  b.strain = {0.005, 0.015, 0.025, 0.035}; // tau = 2e6 e + 1e3, dz = -1e-4 e
+  for (double e : b.strain) {
+    b.shear_stress_Pa.push_back(2e6 * e + 1e3);
+    b.vertical_displacement_m.push_back(-1e-4 * e);
+  }
+  a.consolidated_height_m = 3.0e-3;
+  b.consolidated_height_m = 3.2e-3;
+  a.unloading_modulus_Pa = 40e6;
+  b.unloading_modulus_Pa = 50e6;
+  a.reloading_modulus_Pa = 30e6;
+  b.reloading_modulus_Pa = 36e6;
+  const SimulatedCurve m = mean_of_replicates({a, b});
+  // a's strains inside b's range [0.005, 0.035]: 0.01, 0.02, 0.03.
+  ASSERT_EQ(m.strain.size(), 3u);
+  for (std::size_t k = 0; k < 3; ++k) {
+    const double e = 0.01 * static_cast<double>(k + 1);
+    EXPECT_DOUBLE_EQ(m.strain[k], e);
+    EXPECT_NEAR(m.shear_stress_Pa[k], (1e6 * e + 2e6 * e + 1e3) / 2, 1e-6);
+    EXPECT_NEAR(m.vertical_displacement_m[k], 0.0, 1e-18);
+  }
+  EXPECT_NEAR(m.consolidated_height_m, 3.1e-3, 1e-18);
+  EXPECT_NEAR(m.unloading_modulus_Pa, 45e6, 1e-6);
+  EXPECT_NEAR(m.reloading_modulus_Pa, 33e6, 1e-6);
+  EXPECT_DOUBLE_EQ(m.normal_stress_Pa, 50e3);
+
+  // One replicate is itself; none, or two at different pressures, are refused;
+  // no common strain range gives no curve (an infinite misfit).
+  EXPECT_EQ(mean_of_replicates({a}).strain, a.strain);
+  EXPECT_THROW(mean_of_replicates({}), std::invalid_argument);
+  SimulatedCurve c = b;
+  c.normal_stress_Pa = 150e3;
+  EXPECT_THROW(mean_of_replicates({a, c}), std::invalid_argument);
+  SimulatedCurve late = b;
+  late.strain = {0.05, 0.06, 0.07, 0.08};
+  EXPECT_TRUE(mean_of_replicates({a, late}).strain.empty());
 }
 
 TEST(CalibrationMisfit, MohrCoulombAndPeakTargets) {
@@ -350,6 +399,35 @@ TEST_F(CalibrationConfig, ReadsCurvesAndConvertsDisplacementToStrain) {
   EXPECT_DOUBLE_EQ(sc.ball_ball.rolling_friction, 0.3);
 }
 
+// Each replicate's overrides reach its scenario, last; bad lists are named.
+TEST_F(CalibrationConfig, ReplicatesOverrideEachReplicatesScenario) {
+  const std::string target = "target = { curves = [\"both.csv\"] }\n" + kGoodParameters;
+  const CalibrationScenario c =
+      parse(target + "replicates = [\"specimen.seed = 21\", [\"specimen.seed = 22\", "
+                     "\"specimen.porosity = 0.42\"]]\n");
+  const CalibrationStage& st = c.stages[0];
+  ASSERT_EQ(st.replicates.size(), 2u);
+  const ShearScenario a = stage_scenario(c, st, {}, {0.3}, st.replicates[0]);
+  const ShearScenario b = stage_scenario(c, st, {}, {0.3}, st.replicates[1]);
+  EXPECT_EQ(a.specimen.seed, 21u);
+  EXPECT_EQ(b.specimen.seed, 22u);
+  EXPECT_DOUBLE_EQ(b.specimen.porosity, 0.42);
+  EXPECT_DOUBLE_EQ(b.ball_ball.rolling_friction, 0.3); // the fitted value still reaches it
+  EXPECT_TRUE(parse(target).stages[0].replicates.empty());
+  for (const char* bad : {"replicates = []\n",
+                          "replicates = [\"specimen.seed = 1\", "
+                          "\"specimen.seed = 1\"]\n",
+                          "replicates = [3]\n", "replicates = 4\n", "replicates = [[]]\n"}) {
+    const std::string e = error_of(target + bad);
+    EXPECT_NE(e.find("calibrate.stage[1].replicates"), std::string::npos) << bad << e;
+    EXPECT_NE(e.find("KEY = VALUE"), std::string::npos) << bad << e;
+  }
+  // An override the scenario refuses is named with its replicate.
+  const std::string e = error_of(target + "replicates = [\"specimen.seed = -2\"]\n");
+  EXPECT_NE(e.find("calibrate.stage[1].replicates[1]"), std::string::npos) << e;
+  EXPECT_NE(e.find("specimen.seed"), std::string::npos) << e;
+}
+
 TEST_F(CalibrationConfig, BadMeasuredDataIsNamedWithFileAndLine) {
   write("unsorted.csv", "normal_stress_kPa,shear_strain,shear_stress_kPa\n"
                         "50,0.0,0\n50,0.02,20\n50,0.01,30\n150,0,0\n");
@@ -519,6 +597,84 @@ TEST_F(CalibrationConfig, CommandTakesSetAndCheck) {
       dir_ / "bad.txt", 60);
   EXPECT_EQ(r.code, 2) << r.output;
   EXPECT_NE(r.output.find("a curve at 150 kPa"), std::string::npos) << r.output;
+}
+
+// The calibration examples and the truth behind the replicates example are
+// valid as they stand (their bricks and measured files present and matching):
+// `centridem calibrate --check` on each.
+TEST_F(CalibrationConfig, TheExamplesCheck) {
+  const fs::path ex = fs::path(CENTRIDEM_SOURCE_DIR) / "examples";
+  for (const fs::path f :
+       {ex / "calibrate_small.toml", ex / "calibrate_mohr_coulomb.toml",
+        ex / "calibrate_replicates.toml", ex / "data" / "calibrate_replicates" / "truth.toml"}) {
+    const testutil::CliRun r = testutil::run_centridem(
+        {"calibrate", f.string(), "--check", "--out", (dir_ / "unused").string()},
+        dir_ / "check.txt", 60);
+    EXPECT_EQ(r.code, 0) << f << "\n" << r.output;
+  }
+}
+
+// One evaluation of two replicates on the CI shear box, end to end: each
+// replicate runs in its own folder with its own seed, and the evaluation is
+// judged by the mean of the two (replicates.json and mean_100kPa.csv hold
+// what the misfit was computed from). About 10 s.
+TEST_F(CalibrationConfig, AnEvaluationOfReplicatesIsJudgedByTheirMean) {
+  write("cal.toml", std::string(testutil::kSmallShearBox) +
+                        "\n[calibrate]\n[[calibrate.stage]]\nname = \"dry\"\n" + kGoodParameters +
+                        "budget = 1\nreplicates = [\"specimen.seed = 11\", "
+                        "\"specimen.seed = 12\"]\ntarget = { peak_shear_stress_kPa = [60] }\n");
+  const fs::path out = dir_ / "out";
+  const testutil::CliRun r = testutil::run_centridem(
+      {"calibrate", (dir_ / "cal.toml").string(), "--out", out.string(), "--jobs", "1"},
+      dir_ / "run.txt", 600);
+  ASSERT_EQ(r.code, 0) << r.output;
+  const fs::path ev = out / "dry" / "eval_001";
+  // Each replicate ran with its own seed.
+  std::vector<double> peaks;
+  std::vector<std::vector<double>> strain(2), tau(2);
+  for (int k = 1; k <= 2; ++k) {
+    const fs::path rep = ev / ("replicate_" + std::to_string(k));
+    std::ifstream toml(ev / ("replicate_" + std::to_string(k) + ".toml"));
+    const std::string text{std::istreambuf_iterator<char>(toml), {}};
+    EXPECT_NE(text.find("seed = " + std::to_string(10 + k)), std::string::npos) << text;
+    std::ifstream in(rep / "shear_100kPa.json");
+    ASSERT_TRUE(in) << rep;
+    const nlohmann::json res = nlohmann::json::parse(in);
+    peaks.push_back(res.at("peak_shear_stress_Pa").get<double>());
+    for (const auto& q : res.at("curve_strain_tau_dz")) {
+      const double e = q[0].get<double>();
+      if (!strain[k - 1].empty() && !(e > strain[k - 1].back())) continue;
+      strain[k - 1].push_back(e);
+      tau[k - 1].push_back(q[1].get<double>());
+    }
+  }
+  EXPECT_NE(peaks[0], peaks[1]); // two specimens, two curves
+  // replicates.json: each replicate's peak, and their mean.
+  std::ifstream rj(ev / "replicates.json");
+  const nlohmann::json j = nlohmann::json::parse(rj);
+  const nlohmann::json& pk = j.at("pressures").at(0).at("peak_shear_stress_Pa");
+  EXPECT_DOUBLE_EQ(pk.at("per_replicate").at(0).get<double>(), peaks[0]);
+  EXPECT_DOUBLE_EQ(pk.at("per_replicate").at(1).get<double>(), peaks[1]);
+  EXPECT_NEAR(pk.at("mean").get<double>(), (peaks[0] + peaks[1]) / 2, 1e-9 * peaks[0]);
+  // mean_100kPa.csv: at each of the first replicate's strains inside both
+  // runs, the mean of the first's stress and the second's interpolated there.
+  const std::vector<MeasuredCurve> mean =
+      read_measured_curves((ev / "mean_100kPa.csv").string(), 3e-3);
+  ASSERT_EQ(mean.size(), 1u);
+  ASSERT_GT(mean[0].strain.size(), 10u);
+  for (std::size_t k = 0; k < mean[0].strain.size(); ++k) {
+    const double e = mean[0].strain[k];
+    const double expected =
+        (interpolate(strain[0], tau[0], e) + interpolate(strain[1], tau[1], e)) / 2;
+    EXPECT_NEAR(mean[0].shear_stress_Pa[k], expected, 1e-9 * 100e3 + 1e-6 * std::abs(expected))
+        << "at strain " << e;
+  }
+  // The misfit is the mean curve's peak against 60 kPa.
+  const double mean_peak =
+      *std::max_element(mean[0].shear_stress_Pa.begin(), mean[0].shear_stress_Pa.end());
+  std::ifstream sj(out / "summary.json");
+  const nlohmann::json st = nlohmann::json::parse(sj).at("stages").at(0);
+  EXPECT_NEAR(st.at("misfit").get<double>(), std::abs(mean_peak / 1e3 - 60.0), 1e-6) << st.dump(1);
 }
 
 } // namespace
