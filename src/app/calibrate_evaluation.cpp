@@ -24,12 +24,6 @@ std::string kpa_text(double Pa) {
 
 namespace {
 
-// Every file the calibration writes is replaced whole (a temporary file
-// renamed over it), so a stopped run never leaves half a file.
-void write_text(const fs::path& path, const std::string& text) {
-  replace_text_file(path.string(), text);
-}
-
 // A shear run's result at one pressure, as the calibration compares it.
 SimulatedCurve simulated_curve(const fs::path& run, double sigma) {
   const fs::path p = run / (shear_run_stem(sigma) + ".json");
@@ -149,53 +143,61 @@ std::string replicate_folder(std::size_t k) {
   return fmt::format("replicate_{}", k + 1);
 }
 
-// The result an evaluation is judged by at one pressure: its run's curve, or
-// with replicates the mean of their runs (mean_of_replicates).
-SimulatedCurve evaluation_curve(const CalibrationStage& st, const fs::path& run, double sigma) {
-  if (st.replicates.empty()) return simulated_curve(run, sigma);
+namespace {
+
+// Each replicate's result at one pressure, in the order of stage.replicates.
+std::vector<SimulatedCurve> replicate_curves(const CalibrationStage& st, const fs::path& run,
+                                             double sigma) {
   std::vector<SimulatedCurve> r;
   for (std::size_t k = 0; k < st.replicates.size(); ++k)
     r.push_back(simulated_curve(run / replicate_folder(k), sigma));
-  return mean_of_replicates(r);
+  return r;
 }
 
-// The replicates' mean written beside them: mean_<kPa>kPa.csv in the columns
-// a measured curve is read in (so a mean can be given as a target), and
-// replicates.json with each replicate's overrides, peak, height and moduli,
-// their means and standard deviations (the noise of a single specimen).
+// The values, their mean and sample standard deviation, for replicates.json.
+nlohmann::json spread(const std::vector<double>& v) {
+  double mean = 0, var = 0;
+  for (double x : v) mean += x / static_cast<double>(v.size());
+  for (double x : v) var += (x - mean) * (x - mean);
+  const double sd = v.size() > 1 ? std::sqrt(var / static_cast<double>(v.size() - 1)) : 0.0;
+  return {{"per_replicate", v}, {"mean", mean}, {"standard_deviation", sd}};
+}
+
+} // namespace
+
+SimulatedCurve evaluation_curve(const CalibrationStage& st, const fs::path& run, double sigma) {
+  if (st.replicates.empty()) return simulated_curve(run, sigma);
+  return mean_of_replicates(replicate_curves(st, run, sigma));
+}
+
 void write_replicate_means(const CalibrationStage& st, const fs::path& run) {
   nlohmann::json j = {{"replicates", st.replicates}, {"pressures", nlohmann::json::array()}};
   for (double sigma : st.normal_stresses_Pa) {
-    const SimulatedCurve m = evaluation_curve(st, run, sigma);
+    const std::vector<SimulatedCurve> r = replicate_curves(st, run, sigma);
+    const SimulatedCurve m = mean_of_replicates(r);
+    const std::string csv_name = "mean_" + kpa_text(sigma) + "kPa.csv";
     std::string csv = "shear_strain,shear_stress_Pa,normal_stress_Pa,vertical_displacement_m\n";
     for (std::size_t k = 0; k < m.strain.size(); ++k)
       csv += fmt::format("{:.12g},{:.12g},{:.12g},{:.12g}\n", m.strain[k], m.shear_stress_Pa[k],
                          sigma, m.vertical_displacement_m[k]);
-    write_text(run / ("mean_" + kpa_text(sigma) + "kPa.csv"), csv);
-    nlohmann::json per = nlohmann::json::object();
-    auto stats = [&](const char* name, auto value) {
-      std::vector<double> v;
-      for (std::size_t k = 0; k < st.replicates.size(); ++k)
-        v.push_back(value(simulated_curve(run / replicate_folder(k), sigma)));
-      double mean = 0, var = 0;
-      for (double x : v) mean += x / static_cast<double>(v.size());
-      for (double x : v) var += (x - mean) * (x - mean);
-      const double sd = v.size() > 1 ? std::sqrt(var / static_cast<double>(v.size() - 1)) : 0.0;
-      per[name] = {{"per_replicate", v}, {"mean", mean}, {"standard_deviation", sd}};
-    };
-    stats("peak_shear_stress_Pa", [](const SimulatedCurve& c) {
-      return c.shear_stress_Pa.empty()
-                 ? 0.0
-                 : *std::max_element(c.shear_stress_Pa.begin(), c.shear_stress_Pa.end());
-    });
-    stats("consolidated_height_m", [](const SimulatedCurve& c) { return c.consolidated_height_m; });
-    stats("unloading_modulus_Pa", [](const SimulatedCurve& c) { return c.unloading_modulus_Pa; });
-    stats("reloading_modulus_Pa", [](const SimulatedCurve& c) { return c.reloading_modulus_Pa; });
-    per["normal_stress_Pa"] = sigma;
-    per["mean_curve"] = "mean_" + kpa_text(sigma) + "kPa.csv";
-    j["pressures"].push_back(per);
+    replace_text_file((run / csv_name).string(), csv);
+    std::vector<double> peak, height, unloading, reloading;
+    for (const SimulatedCurve& c : r) {
+      peak.push_back(c.shear_stress_Pa.empty()
+                         ? 0.0
+                         : *std::max_element(c.shear_stress_Pa.begin(), c.shear_stress_Pa.end()));
+      height.push_back(c.consolidated_height_m);
+      unloading.push_back(c.unloading_modulus_Pa);
+      reloading.push_back(c.reloading_modulus_Pa);
+    }
+    j["pressures"].push_back({{"normal_stress_Pa", sigma},
+                              {"mean_curve", csv_name},
+                              {"peak_shear_stress_Pa", spread(peak)},
+                              {"consolidated_height_m", spread(height)},
+                              {"unloading_modulus_Pa", spread(unloading)},
+                              {"reloading_modulus_Pa", spread(reloading)}});
   }
-  write_text(run / "replicates.json", j.dump(1) + "\n");
+  replace_text_file((run / "replicates.json").string(), j.dump(1) + "\n");
 }
 
 // Compares a finished run folder with the stage's target.

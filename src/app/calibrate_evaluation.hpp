@@ -35,9 +35,10 @@ std::string replicate_folder(std::size_t k);
 SimulatedCurve evaluation_curve(const CalibrationStage& st, const std::filesystem::path& run,
                                 double sigma);
 
-// Beside the replicates of an evaluation: mean_<kPa>kPa.csv (the mean curve in
-// the columns a measured curve is read in, so a mean can be given as a
-// target) and replicates.json (each replicate's overrides, peak, height and
+// Beside the replicates of an evaluation, each file replaced whole (a stopped
+// run never leaves half a file): mean_<kPa>kPa.csv (the mean curve in the
+// columns a measured curve is read in, so a mean can be given as a target)
+// and replicates.json (each replicate's overrides, peak, height and
 // moduli, their mean and standard deviation).
 void write_replicate_means(const CalibrationStage& st, const std::filesystem::path& run);
 

@@ -36,10 +36,6 @@ using cli::seconds_since;
 
 namespace {
 
-std::string kpa(double Pa) {
-  return kpa_text(Pa);
-}
-
 // Every file the calibration writes is replaced whole (a temporary file
 // renamed over it), so a stopped run never leaves half a file.
 void write_text(const fs::path& path, const std::string& text) {
@@ -120,21 +116,21 @@ void plot_curves(const CalibrationStage& st, const fs::path& run, const Evaluati
         for (double& x : v) x *= f;
         return v;
       };
-      tau.add("measured " + kpa(m.normal_stress_Pa) + " kPa", pct(m.strain),
+      tau.add("measured " + kpa_text(m.normal_stress_Pa) + " kPa", pct(m.strain),
               scaled(m.shear_stress_Pa, 1e-3))
           .markers_only(Marker::circle)
           .with_colour(palette_colour(k));
-      tau.add("simulated " + kpa(m.normal_stress_Pa) + " kPa", pct(s.strain),
+      tau.add("simulated " + kpa_text(m.normal_stress_Pa) + " kPa", pct(s.strain),
               scaled(s.shear_stress_Pa, 1e-3))
           .with_colour(palette_colour(k));
       if (!m.vertical_displacement_m.empty()) {
         any_dz = true;
-        dz.add("measured " + kpa(m.normal_stress_Pa) + " kPa", pct(m.strain),
+        dz.add("measured " + kpa_text(m.normal_stress_Pa) + " kPa", pct(m.strain),
                scaled(m.vertical_displacement_m, 1e3))
             .markers_only(Marker::circle)
             .with_colour(palette_colour(k));
       }
-      dz.add("simulated " + kpa(m.normal_stress_Pa) + " kPa", pct(s.strain),
+      dz.add("simulated " + kpa_text(m.normal_stress_Pa) + " kPa", pct(s.strain),
              scaled(s.vertical_displacement_m, 1e3))
           .with_colour(palette_colour(k));
     }
@@ -231,7 +227,7 @@ int run_calibrate_command(const CalibrateCommandOptions& o) {
             st.normal_stresses_Pa.size(),
             [&] {
               std::string l;
-              for (double s : st.normal_stresses_Pa) l += (l.empty() ? "" : ", ") + kpa(s);
+              for (double s : st.normal_stresses_Pa) l += (l.empty() ? "" : ", ") + kpa_text(s);
               return l;
             }(),
             st.optimiser.budget, st.optimiser.tolerance, st.misfit_unit());
