@@ -33,6 +33,7 @@ SimulatedCurve simulated_curve(const fs::path& run, double sigma) {
   SimulatedCurve c;
   c.normal_stress_Pa = sigma;
   c.consolidated_height_m = j.at("consolidated_height_m").get<double>();
+  c.affine_modulus_Pa = j.value("consolidated_affine_modulus_Pa", 0.0);
   if (j.contains("unload_reload")) {
     c.unloading_modulus_Pa = j.at("unload_reload").at("unloading_modulus_Pa").get<double>();
     c.reloading_modulus_Pa = j.at("unload_reload").at("reloading_modulus_Pa").get<double>();
@@ -65,6 +66,9 @@ std::vector<std::string> part_names(const CalibrationStage& st) {
     if (st.curves.front().reloading_modulus_Pa > 0)
       for (double s : st.normal_stresses_Pa)
         n.push_back("reloading_modulus_difference_at_" + kpa_text(s) + "kPa_percent");
+    if (st.curves.front().affine_modulus_Pa > 0)
+      for (double s : st.normal_stresses_Pa)
+        n.push_back("affine_modulus_difference_at_" + kpa_text(s) + "kPa_percent");
     break;
   case CalibrationTargetKind::peak_stresses:
     for (double s : st.normal_stresses_Pa)
@@ -181,7 +185,7 @@ void write_replicate_means(const CalibrationStage& st, const fs::path& run) {
       csv += fmt::format("{:.12g},{:.12g},{:.12g},{:.12g}\n", m.strain[k], m.shear_stress_Pa[k],
                          sigma, m.vertical_displacement_m[k]);
     replace_text_file((run / csv_name).string(), csv);
-    std::vector<double> peak, height, unloading, reloading;
+    std::vector<double> peak, height, unloading, reloading, affine;
     for (const SimulatedCurve& c : r) {
       peak.push_back(c.shear_stress_Pa.empty()
                          ? 0.0
@@ -189,13 +193,15 @@ void write_replicate_means(const CalibrationStage& st, const fs::path& run) {
       height.push_back(c.consolidated_height_m);
       unloading.push_back(c.unloading_modulus_Pa);
       reloading.push_back(c.reloading_modulus_Pa);
+      affine.push_back(c.affine_modulus_Pa);
     }
     j["pressures"].push_back({{"normal_stress_Pa", sigma},
                               {"mean_curve", csv_name},
                               {"peak_shear_stress_Pa", spread(peak)},
                               {"consolidated_height_m", spread(height)},
                               {"unloading_modulus_Pa", spread(unloading)},
-                              {"reloading_modulus_Pa", spread(reloading)}});
+                              {"reloading_modulus_Pa", spread(reloading)},
+                              {"affine_modulus_Pa", spread(affine)}});
   }
   replace_text_file((run / "replicates.json").string(), j.dump(1) + "\n");
 }
@@ -216,6 +222,8 @@ void compare_with_target(const CalibrationStage& st, const fs::path& run, Evalua
       for (const CurveMisfit& m : per) e.parts.push_back(m.unloading_modulus_difference * 100);
     if (st.curves.front().reloading_modulus_Pa > 0)
       for (const CurveMisfit& m : per) e.parts.push_back(m.reloading_modulus_difference * 100);
+    if (st.curves.front().affine_modulus_Pa > 0)
+      for (const CurveMisfit& m : per) e.parts.push_back(m.affine_modulus_difference * 100);
     e.misfit = overall_misfit(per) / 1e3;
     break;
   }

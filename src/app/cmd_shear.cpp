@@ -129,10 +129,11 @@ void run_one(const ShearScenario& sc, double sigma, int threads, const fs::path&
       first = {now, p.shear_displacement_m};
       if (r.curve.size() == 1)
         log(fmt::format("consolidated in {} steps (sigma {:.1f} kPa, height {:.3f} mm, porosity "
-                        "{:.3f}, coordination {:.2f}); shearing",
+                        "{:.3f}, coordination {:.2f}, affine modulus {:.1f} MPa); shearing",
                         r.consolidation_steps, r.consolidated_normal_stress_Pa / 1000,
                         r.consolidated_height_m * 1e3, r.consolidated_porosity,
-                        r.consolidated_coordination_number));
+                        r.consolidated_coordination_number,
+                        r.consolidated_affine_modulus_Pa / 1e6));
       if (r.unload_reload.done)
         log(fmt::format("unload-reload {:.1f} -> {:.1f} -> {:.1f} kPa in {} steps: constrained "
                         "modulus {:.1f} MPa unloading, {:.1f} MPa reloading",
@@ -172,6 +173,7 @@ void run_one(const ShearScenario& sc, double sigma, int threads, const fs::path&
                       {"consolidated_normal_stress_Pa", r.consolidated_normal_stress_Pa},
                       {"consolidated_porosity", r.consolidated_porosity},
                       {"consolidated_coordination_number", r.consolidated_coordination_number},
+                      {"consolidated_affine_modulus_Pa", r.consolidated_affine_modulus_Pa},
                       {"settling_steps", r.settling_steps},
                       {"shear_steps", r.curve.empty() ? 0L
                                                       : r.curve.back().step - r.curve.front().step +

@@ -190,6 +190,60 @@ RegionMeasurement World::measure_region(const Box& box) const {
   return out;
 }
 
+// The affine (Voigt) estimate of a packing's stiffness (Walton 1987, J. Mech. Phys. Solids 35(2);
+// Agnolin & Roux 2007, Phys. Rev. E 76, 061304, "affine" moduli): under a uniform strain eps_aa
+// each ball-ball contact's branch vector l (centre to centre) changes by dl = eps_aa l_a e_a, its
+// springs answer with df = kn (n . dl) n + ks (dl - (n . dl) n), and with the Love-Weber sum above
+// (arm c from each centre p in the box to the contact point)
+//     M_a = (1/V) sum_p sum_c c_a l_a [kn n_a^2 + ks (1 - n_a^2)]   [Pa]
+// (n the unit normal, kn and ks in N/m from contact_stiffness, V the box volume; for a contact
+// with both ends in the box the two arms add up to l, giving l_a^2). Only touching ball-ball
+// contacts (overlap > 0) count: a gap's attraction has no spring, and the walls' springs belong to
+// the apparatus, not the packing (with them, the calibration box's 1 GPa walls made about 40 % of
+// the sum). Rolling springs do not enter (an affine strain turns no grain). In a packing large
+// against its grains, an upper bound of the relaxed small-strain modulus (near a wall the box's
+// volume holds half-grains without springs, so a thin box reads lower). It depends on E* and on
+// the fabric (which contacts touch, their directions), not on how the grains would rearrange, so
+// it is nearly free of the noise the rearrangement brings to a relaxed loop
+// (docs/results/calibrate.md, section 7).
+double World::affine_modulus_Pa(const Box& box, int axis) const {
+  const std::size_t n = p_.size();
+  const double volume = box.volume();
+  if (!(volume > 0)) throw InputError("region", "empty box", "hi must exceed lo on every axis");
+  if (axis < 0 || axis > 2) throw InputError("axis", fmt::format("{}", axis), "0, 1 or 2");
+  if (bb_.row_offset.size() != n + 1) return 0.0;
+  const auto& x = p_.position;
+  const auto& r = p_.radius;
+  double sum = 0.0;
+  auto add = [&](const ContactProperties& cp, const ContactGeometry& g, const Vec3& normal,
+                 double arm_m, double branch_m) {
+    if (g.overlap_m <= 0) return;
+    const ContactStiffness k = contact_stiffness(cp, g);
+    const double na = normal[axis];
+    sum += (arm_m * na) * (branch_m * na) * (k.kn * na * na + k.ks * (1.0 - na * na));
+  };
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!box.contains(x[i])) continue;
+    auto ball_ball = [&](std::uint32_t e, std::size_t j, const Vec3& d) {
+      const double dist = norm(d);
+      const double ov = r[i] + r[j] - dist;
+      add(props_[bb_.properties[e]],
+          {{}, ov, {}, {}, std::min(r[i], r[j]), r[i] + r[j], r[i] * r[j] / (r[i] + r[j]), 0.0},
+          d / dist, r[i] - 0.5 * ov, dist);
+    };
+    for (std::uint32_t e = bb_.row_offset[i]; e < bb_.row_offset[i + 1]; ++e)
+      if (bb_.properties[e] != kNoContact)
+        ball_ball(e, bb_.other[e], pair_vector(e, i, bb_.other[e]));
+    for (std::uint32_t k = bb_.incoming_offset[i]; k < bb_.incoming_offset[i + 1]; ++k) {
+      const std::uint32_t e = bb_.incoming[k];
+      if (bb_.properties[e] == kNoContact) continue;
+      const std::size_t a = first_end(e);
+      ball_ball(e, a, -pair_vector(e, a, i));
+    }
+  }
+  return sum / volume;
+}
+
 std::vector<ContactView> World::ball_ball_contacts() const {
   std::vector<ContactView> out;
   const std::size_t n = p_.size();

@@ -212,6 +212,11 @@ public:
   // the model: the slope above its foundation, say); 0 when none [-].
   double mean_unbalanced_force_ratio(const std::function<bool(std::size_t)>& include) const;
   RegionMeasurement measure_region(const Box& box) const;
+  // The contact network's affine (unrelaxed) modulus along `axis` (0 x, 1 y, 2 z) over the
+  // particles whose centres lie in `box`: d sigma_aa / d eps_aa when every centre and wall moves
+  // with one uniform strain eps_aa and no grain rearranges or slides [Pa]. Formula and source in
+  // measurements.cpp.
+  double affine_modulus_Pa(const Box& box, int axis) const;
   std::vector<ContactView> ball_ball_contacts() const;
   std::size_t bytes_per_particle() const; // all engine storage / particles
   std::size_t neighbour_entries() const { return bb_.entries(); }

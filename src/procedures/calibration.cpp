@@ -42,6 +42,7 @@ SimulatedCurve mean_of_replicates(const std::vector<SimulatedCurve>& replicates)
     m.consolidated_height_m += r.consolidated_height_m / n;
     m.unloading_modulus_Pa += r.unloading_modulus_Pa / n;
     m.reloading_modulus_Pa += r.reloading_modulus_Pa / n;
+    m.affine_modulus_Pa += r.affine_modulus_Pa / n;
     if (r.strain.empty()) return m; // nothing in common: no curve
     lo = std::max(lo, r.strain.front());
     hi = std::min(hi, r.strain.back());
@@ -115,9 +116,12 @@ CurveMisfit curve_misfit(const MeasuredCurve& measured, const SimulatedCurve& si
       weights.modulus_kPa_per_percent * (m.unloading_modulus_difference * 100) * 1e3;
   const double dr_Pa =
       weights.modulus_kPa_per_percent * (m.reloading_modulus_difference * 100) * 1e3;
-  m.total_Pa = std::sqrt(m.rms_shear_stress_Pa * m.rms_shear_stress_Pa +
-                         weights.peak * m.peak_difference_Pa * m.peak_difference_Pa +
-                         dz_Pa * dz_Pa + dh_Pa * dh_Pa + du_Pa * du_Pa + dr_Pa * dr_Pa);
+  m.affine_modulus_difference = relative(simulated.affine_modulus_Pa, measured.affine_modulus_Pa);
+  const double da_Pa = weights.modulus_kPa_per_percent * (m.affine_modulus_difference * 100) * 1e3;
+  m.total_Pa =
+      std::sqrt(m.rms_shear_stress_Pa * m.rms_shear_stress_Pa +
+                weights.peak * m.peak_difference_Pa * m.peak_difference_Pa + dz_Pa * dz_Pa +
+                dh_Pa * dh_Pa + du_Pa * du_Pa + dr_Pa * dr_Pa + da_Pa * da_Pa);
   return m;
 }
 

@@ -37,6 +37,13 @@ struct MeasuredCurve {
   // (shear.unload_reload_fraction; docs/shear.md); 0 when not measured [Pa].
   double unloading_modulus_Pa = 0;
   double reloading_modulus_Pa = 0;
+  // The consolidated packing's affine vertical modulus (World::affine_modulus_Pa: the contact
+  // springs met by a uniform strain before any grain moves); 0 when not given [Pa]. It follows
+  // E* and the fabric, and hardly the chaos that makes the loop's moduli noisy
+  // (docs/results/calibrate.md section 7). A simulated quantity: a laboratory's nearest one is
+  // the small-strain modulus of a bender element or resonant column, which it bounds from above in
+  // a large specimen.
+  double affine_modulus_Pa = 0;
   std::string source; // the file, for messages
 };
 
@@ -49,6 +56,7 @@ struct SimulatedCurve {
   double consolidated_height_m = 0;            // after consolidation [m]
   double unloading_modulus_Pa = 0;             // of the unload-reload loop; 0: none run [Pa]
   double reloading_modulus_Pa = 0;             // [Pa]
+  double affine_modulus_Pa = 0;                // after consolidation [Pa]
 };
 
 // The mean of replicate runs at one pressure (specimens of different seeds:
@@ -79,7 +87,9 @@ struct CurveMisfit {
   // The unload-reload moduli, simulated / measured - 1 (0: not measured) [-].
   double unloading_modulus_difference = 0;
   double reloading_modulus_difference = 0;
-  // sqrt(rms^2 + w_p dpeak^2 + (w_d rms_dz)^2 + (w_h dh)^2 + (w_m 100 dMu)^2 + (w_m 100 dMr)^2)
+  double affine_modulus_difference = 0; // the affine modulus, likewise [-]
+  // sqrt(rms^2 + w_p dpeak^2 + (w_d rms_dz)^2 + (w_h dh)^2 + (w_m 100 dMu)^2 + (w_m 100 dMr)^2
+  //      + (w_m 100 dMa)^2)
   double total_Pa = 0;
   std::size_t points = 0; // measured points compared
 };

@@ -42,7 +42,8 @@ const Keys kTargetKeys = {"curves",
                           "peak_shear_stress_kPa",
                           "consolidated_height_mm",
                           "unloading_modulus_MPa",
-                          "reloading_modulus_MPa"};
+                          "reloading_modulus_MPa",
+                          "affine_modulus_MPa"};
 const Keys kCurveFileKeys = {"file", "normal_stress_kPa"};
 
 std::string kpa(double Pa) {
@@ -268,7 +269,7 @@ void read_target(const toml::node& node, const std::string& P, CalibrationStage&
   const toml::node* heights = t.get("consolidated_height_mm");
   if (heights && !curves)
     fail(P + ".consolidated_height_mm", *heights, "only beside measured curves (target.curves)");
-  for (const char* k : {"unloading_modulus_MPa", "reloading_modulus_MPa"})
+  for (const char* k : {"unloading_modulus_MPa", "reloading_modulus_MPa", "affine_modulus_MPa"})
     if (const toml::node* n = t.get(k); n && !curves)
       fail(P + "." + k, *n, "only beside measured curves (target.curves)");
   if (mc) {
@@ -383,29 +384,35 @@ void read_target(const toml::node& node, const std::string& P, CalibrationStage&
       st.curves[k].consolidated_height_m = mm * 1e-3;
     }
   }
-  // The unload-reload moduli: one per pressure, and the scenario must run the loop.
-  for (const bool unloading : {true, false}) {
-    const std::string name = unloading ? "unloading_modulus_MPa" : "reloading_modulus_MPa";
+  // The moduli: one per pressure, each > 0 [MPa], into the curve's field `into`.
+  auto read_moduli = [&](const char* name, const std::string& what, double MeasuredCurve::*into) {
     const toml::node* mn = t.get(name);
-    if (!mn) continue;
+    if (!mn) return;
     const std::string mk = P + "." + name;
-    if (!(sc.test.unload_reload_fraction > 0))
+    if (std::string_view(name) != "affine_modulus_MPa" && !(sc.test.unload_reload_fraction > 0))
       fail(mk, *mn,
            "a modulus target only with an unload-reload loop in the scenario: "
            "shear.unload_reload_fraction in (0, 1), e.g. 0.9 (docs/shear.md)");
     const toml::array* ma = mn->as_array();
     const std::string allowed = fmt::format(
-        "a list of {} constrained moduli [MPa] of the unload-reload loop, one per normal stress "
-        "of the stage, rising ({} kPa), each > 0",
-        st.curves.size(), pressures);
+        "a list of {} {}, one per normal stress of the stage, rising ({} kPa), each > 0",
+        st.curves.size(), what, pressures);
     if (!ma || ma->size() != st.curves.size()) fail(mk, *mn, allowed);
     for (std::size_t k = 0; k < ma->size(); ++k) {
       const double MPa = tomlread::as_number((*ma)[k], fmt::format("{}[{}]", mk, k), allowed);
       if (!(MPa > 0)) fail(fmt::format("{}[{}]", mk, k), (*ma)[k], allowed);
-      (unloading ? st.curves[k].unloading_modulus_Pa : st.curves[k].reloading_modulus_Pa) =
-          MPa * 1e6;
+      st.curves[k].*into = MPa * 1e6;
     }
-  }
+  };
+  // The unload-reload loop's (the scenario must run it), and the affine moduli (every shear run
+  // measures them).
+  const std::string loop = "constrained moduli [MPa] of the unload-reload loop";
+  read_moduli("unloading_modulus_MPa", loop, &MeasuredCurve::unloading_modulus_Pa);
+  read_moduli("reloading_modulus_MPa", loop, &MeasuredCurve::reloading_modulus_Pa);
+  read_moduli("affine_modulus_MPa",
+              "affine moduli [MPa] after consolidation (the shear runs' "
+              "consolidated_affine_modulus_Pa / 1e6)",
+              &MeasuredCurve::affine_modulus_Pa);
 }
 
 } // namespace
@@ -561,14 +568,16 @@ CalibrationScenario parse_calibration(std::string_view text, const std::string& 
                        "(e.g. 1: a micrometre counts as a kPa)");
     const bool moduli =
         st.kind == CalibrationTargetKind::curves &&
-        (st.curves.front().unloading_modulus_Pa > 0 || st.curves.front().reloading_modulus_Pa > 0);
+        (st.curves.front().unloading_modulus_Pa > 0 || st.curves.front().reloading_modulus_Pa > 0 ||
+         st.curves.front().affine_modulus_Pa > 0);
     if (moduli != (st.weights.modulus_kPa_per_percent > 0))
-      throw InputError(moduli ? P + ".modulus_weight_kPa_per_percent" : P + ".target",
-                       moduli ? "(not given)"
-                              : "(no unloading_modulus_MPa or reloading_modulus_MPa)",
-                       "measured unload-reload moduli and a weight > 0 for them go together: "
-                       "target.reloading_modulus_MPa = [...] with modulus_weight_kPa_per_percent "
-                       "(e.g. 0.5: a per cent counts as half a kPa)");
+      throw InputError(
+          moduli ? P + ".modulus_weight_kPa_per_percent" : P + ".target",
+          moduli ? "(not given)"
+                 : "(no unloading_modulus_MPa or reloading_modulus_MPa, no affine_modulus_MPa)",
+          "measured moduli and a weight > 0 for them go together: "
+          "target.affine_modulus_MPa = [...] (or the loop's reloading_modulus_MPa) with "
+          "modulus_weight_kPa_per_percent (e.g. 0.5: a per cent counts as half a kPa)");
     for (const CalibrationParameter& p : st.parameters)
       earlier.push_back(parameter_override(p, p.start));
     c.stages.push_back(std::move(st));

@@ -145,6 +145,7 @@ std::string save_state(const ShearProgressState& p, double wall_seconds_now,
               {"consolidated_normal_stress_Pa", r.consolidated_normal_stress_Pa},
               {"consolidated_porosity", r.consolidated_porosity},
               {"consolidated_coordination_number", r.consolidated_coordination_number},
+              {"consolidated_affine_modulus_Pa", r.consolidated_affine_modulus_Pa},
               {"settling_steps", r.settling_steps},
               {"unload_reload_leg", p.unload_reload_leg},
               {"leg_first_step", p.leg_first_step},
@@ -186,6 +187,7 @@ ShearProgressState load_state(const std::string& blob, const std::string& path) 
     r.consolidated_normal_stress_Pa = j.at("consolidated_normal_stress_Pa");
     r.consolidated_porosity = j.value("consolidated_porosity", 0.0); // absent before 2026-12
     r.consolidated_coordination_number = j.value("consolidated_coordination_number", 0.0);
+    r.consolidated_affine_modulus_Pa = j.value("consolidated_affine_modulus_Pa", 0.0);
     r.settling_steps = j.value("settling_steps", 0L);
     // Absent before the unload-reload loop (2026-12-03): none, and shearing
     // measured from the consolidated height.
@@ -302,6 +304,10 @@ DirectShearResult run_direct_shear(World& w, const DirectShearSpec& s,
       r.consolidated_porosity = porosity_now();
       r.consolidated_coordination_number = w.measure().coordination_number;
       r.consolidated_normal_stress_Pa = normal_stress();
+      r.consolidated_affine_modulus_Pa =
+          w.affine_modulus_Pa(Box{{0, 0, w.walls()[bottom].point.z},
+                                  {s.box.length_m, s.box.width_m, w.walls()[top].point.z}},
+                              2);
     };
     // Consolidation, then (prepared specimens) settling with the material,
     // then (optionally) the unload-reload loop's two legs.

@@ -97,6 +97,9 @@ struct DirectShearResult {
   double consolidated_normal_stress_Pa = 0;    // bottom-wall stress when consolidation ended
   double consolidated_porosity = 0;            // centre-based, inside the box, then [-]
   double consolidated_coordination_number = 0; // (2 Nbb + Nbw) / N, then [-]
+  // The contact network's affine vertical modulus then (World::affine_modulus_Pa over the box
+  // between the walls): what a uniform vertical strain would meet before any grain moves [Pa]
+  double consolidated_affine_modulus_Pa = 0;
   // Prepared specimens: steps to settle with the material after the packing
   // (included in consolidation_steps) [-]
   long settling_steps = 0;

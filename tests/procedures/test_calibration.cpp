@@ -96,6 +96,15 @@ TEST(CalibrationMisfit, CurveAgainstHandComputedValues) {
   mu.unloading_modulus_Pa = 40e6;
   EXPECT_NEAR(curve_misfit(mu, s, wm).total_Pa, std::sqrt(12.0 + 4.0 + 2500.0) * 1e3, 1e-6);
   EXPECT_NEAR(curve_misfit(m, sm, wm).total_Pa, 4e3, 1e-9);
+  // The affine modulus, weighed as the loop's: 88 MPa simulated against 80 measured is +10 %,
+  // 5 kPa at 0.5 kPa/%: sqrt(12 + 4 + 25) kPa.
+  MeasuredCurve ma = m;
+  ma.affine_modulus_Pa = 80e6;
+  SimulatedCurve sa = s;
+  sa.affine_modulus_Pa = 88e6;
+  const CurveMisfit affine = curve_misfit(ma, sa, wm);
+  EXPECT_NEAR(affine.affine_modulus_difference, 0.10, 1e-12);
+  EXPECT_NEAR(affine.total_Pa, std::sqrt(12.0 + 4.0 + 25.0) * 1e3, 1e-6);
 
   // Two pressures with totals 3 and 4 kPa: sqrt((9 + 16) / 2) kPa.
   CurveMisfit a, b;
@@ -130,6 +139,8 @@ TEST(CalibrationMisfit, MeanOfReplicatesIsTheMeanCurveOnTheCommonStrains) {
   b.unloading_modulus_Pa = 50e6;
   a.reloading_modulus_Pa = 30e6;
   b.reloading_modulus_Pa = 36e6;
+  a.affine_modulus_Pa = 80e6;
+  b.affine_modulus_Pa = 90e6;
   const SimulatedCurve m = mean_of_replicates({a, b});
   // a's strains inside b's range [0.005, 0.035]: 0.01, 0.02, 0.03.
   ASSERT_EQ(m.strain.size(), 3u);
@@ -142,6 +153,7 @@ TEST(CalibrationMisfit, MeanOfReplicatesIsTheMeanCurveOnTheCommonStrains) {
   EXPECT_NEAR(m.consolidated_height_m, 3.1e-3, 1e-18);
   EXPECT_NEAR(m.unloading_modulus_Pa, 45e6, 1e-6);
   EXPECT_NEAR(m.reloading_modulus_Pa, 33e6, 1e-6);
+  EXPECT_NEAR(m.affine_modulus_Pa, 85e6, 1e-6);
   EXPECT_DOUBLE_EQ(m.normal_stress_Pa, 50e3);
 
   // One replicate is itself; none, or two at different pressures, are refused;
@@ -536,6 +548,27 @@ TEST_F(CalibrationConfig, UnloadReloadModuliNeedTheLoopAndAWeight) {
   e = error_of(loop +
                "target = { peak_shear_stress_kPa = [30, 90], unloading_modulus_MPa = "
                "[30, 45] }\n" +
+               kGoodParameters);
+  EXPECT_NE(e.find("only beside measured curves"), std::string::npos) << e;
+}
+
+// Affine moduli: one per pressure, positive, with the moduli's weight; every shear run measures
+// them, so no loop is needed.
+TEST_F(CalibrationConfig, AffineModuliNeedOnePerPressureAndAWeight) {
+  const std::string weight = "modulus_weight_kPa_per_percent = 1\n";
+  const std::string curves = "target = { curves = [\"both.csv\"], affine_modulus_MPa = ";
+  const CalibrationScenario c = parse(curves + "[80, 87.5] }\n" + weight + kGoodParameters);
+  EXPECT_DOUBLE_EQ(c.stages[0].curves[0].affine_modulus_Pa, 80e6);
+  EXPECT_DOUBLE_EQ(c.stages[0].curves[1].affine_modulus_Pa, 87.5e6);
+  EXPECT_DOUBLE_EQ(c.stages[0].curves[1].reloading_modulus_Pa, 0.0);
+  std::string e = error_of(curves + "[80] }\n" + weight + kGoodParameters);
+  EXPECT_NE(e.find("calibrate.stage[1].target.affine_modulus_MPa"), std::string::npos) << e;
+  EXPECT_NE(e.find("one per normal stress"), std::string::npos) << e;
+  e = error_of(curves + "[80, 0] }\n" + weight + kGoodParameters);
+  EXPECT_NE(e.find("affine_modulus_MPa[1]"), std::string::npos) << e;
+  e = error_of(curves + "[80, 87.5] }\n" + kGoodParameters);
+  EXPECT_NE(e.find("calibrate.stage[1].modulus_weight_kPa_per_percent"), std::string::npos) << e;
+  e = error_of("target = { peak_shear_stress_kPa = [30, 90], affine_modulus_MPa = [80, 87.5] }\n" +
                kGoodParameters);
   EXPECT_NE(e.find("only beside measured curves"), std::string::npos) << e;
 }

@@ -215,7 +215,8 @@ TEST(DirectShear, MohrCoulombFitRecoversALine) {
 // spheres, frictionless walls, no gravity): every column is a chain of 5
 // ball-ball and 2 ball-wall linear springs carrying sigma (2R)^2, so the
 // constrained modulus is exactly h / ((2R)^2 (5/kn_bb + 2/kn_bw)) on both legs
-// (about 267 MPa), with no hysteresis. Measured: within 0.15 % (bound 1 %).
+// (about 267 MPa), with no hysteresis. Measured: within 0.15 % (bound 1 %). The affine
+// modulus at consolidation is the ball-ball springs' alone (below).
 TEST(DirectShear, UnloadReloadOfACubicLatticeGivesItsSpringChainModulus) {
   const double R = 0.25e-3, sigma = 50e3;
   const int columns = 8, layers = 6;
@@ -255,6 +256,15 @@ TEST(DirectShear, UnloadReloadOfACubicLatticeGivesItsSpringChainModulus) {
   const double closure = u.reloaded_height_m - u.loaded_height_m +
                          (u.reloaded_normal_stress_Pa - u.loaded_normal_stress_Pa) * compliance;
   EXPECT_LT(std::abs(closure), 0.01 * rebound);
+  // The affine modulus when consolidated: the 5 x 64 vertical ball-ball springs, each of
+  // branch 2R - delta (delta = sigma (2R)^2 / kn_bb), over the specimen's volume; the walls'
+  // springs are left out, the horizontal contacts have n_z = 0.
+  const double branch = 2 * R - sigma * 4 * R * R / kn_bb;
+  const double expected_affine = columns * columns * (layers - 1) * kn_bb * branch * branch /
+                                 (s.box.length_m * s.box.width_m * r.consolidated_height_m);
+  EXPECT_NEAR(r.consolidated_affine_modulus_Pa, expected_affine, 0.01 * expected_affine);
+  std::printf("lattice affine modulus: %.2f MPa measured, %.2f MPa expected\n",
+              r.consolidated_affine_modulus_Pa / 1e6, expected_affine / 1e6);
   std::printf("lattice unload-reload: %.2f / %.2f MPa measured, %.2f MPa expected; rebound "
               "%.3f um, closure %.4f um\n",
               u.unloading_modulus_Pa() / 1e6, u.reloading_modulus_Pa() / 1e6,
