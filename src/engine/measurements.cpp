@@ -12,6 +12,15 @@
 
 namespace centridem {
 
+namespace {
+// The sizes the stiffness rule reads for a ball-ball contact of radii r1, r2 at overlap ov [m]
+// (as the contact pass forms them: contact radius min(R1, R2), length R1 + R2, rolling radius
+// R1 R2 / (R1 + R2)); the vectors and the mass are left zero, as no measurement here reads them.
+ContactGeometry ball_ball_geometry(double r1, double r2, double ov) {
+  return {{}, ov, {}, {}, std::min(r1, r2), r1 + r2, r1 * r2 / (r1 + r2), 0.0};
+}
+} // namespace
+
 // ------------------------------------------------------------ measurements --
 
 // The magnitudes of every force applied to particle i: body, applied,
@@ -125,9 +134,7 @@ Energy World::energy() const {
       if (bb_.properties[e] == kNoContact) continue;
       const std::uint32_t j = bb_.other[e];
       const double ov = r[i] + r[j] - norm(pair_vector(e, i, j));
-      strain(props_[bb_.properties[e]],
-             {{}, ov, {}, {}, std::min(r[i], r[j]), r[i] + r[j], r[i] * r[j] / (r[i] + r[j]), 0.0},
-             bb_.state[e]);
+      strain(props_[bb_.properties[e]], ball_ball_geometry(r[i], r[j], ov), bb_.state[e]);
     }
     for (std::uint32_t e = bw_.row_offset[i]; e < bw_.row_offset[i + 1]; ++e) {
       if (bw_.properties[e] == kNoContact) continue;
@@ -227,9 +234,8 @@ double World::affine_modulus_Pa(const Box& box, int axis) const {
     auto ball_ball = [&](std::uint32_t e, std::size_t j, const Vec3& d) {
       const double dist = norm(d);
       const double ov = r[i] + r[j] - dist;
-      add(props_[bb_.properties[e]],
-          {{}, ov, {}, {}, std::min(r[i], r[j]), r[i] + r[j], r[i] * r[j] / (r[i] + r[j]), 0.0},
-          d / dist, r[i] - 0.5 * ov, dist);
+      add(props_[bb_.properties[e]], ball_ball_geometry(r[i], r[j], ov), d / dist, r[i] - 0.5 * ov,
+          dist);
     };
     for (std::uint32_t e = bb_.row_offset[i]; e < bb_.row_offset[i + 1]; ++e)
       if (bb_.properties[e] != kNoContact)

@@ -385,11 +385,12 @@ void read_target(const toml::node& node, const std::string& P, CalibrationStage&
     }
   }
   // The moduli: one per pressure, each > 0 [MPa], into the curve's field `into`.
-  auto read_moduli = [&](const char* name, const std::string& what, double MeasuredCurve::*into) {
+  auto read_moduli = [&](const char* name, const std::string& what, bool needs_loop,
+                         double MeasuredCurve::*into) {
     const toml::node* mn = t.get(name);
     if (!mn) return;
     const std::string mk = P + "." + name;
-    if (std::string_view(name) != "affine_modulus_MPa" && !(sc.test.unload_reload_fraction > 0))
+    if (needs_loop && !(sc.test.unload_reload_fraction > 0))
       fail(mk, *mn,
            "a modulus target only with an unload-reload loop in the scenario: "
            "shear.unload_reload_fraction in (0, 1), e.g. 0.9 (docs/shear.md)");
@@ -407,12 +408,12 @@ void read_target(const toml::node& node, const std::string& P, CalibrationStage&
   // The unload-reload loop's (the scenario must run it), and the affine moduli (every shear run
   // measures them).
   const std::string loop = "constrained moduli [MPa] of the unload-reload loop";
-  read_moduli("unloading_modulus_MPa", loop, &MeasuredCurve::unloading_modulus_Pa);
-  read_moduli("reloading_modulus_MPa", loop, &MeasuredCurve::reloading_modulus_Pa);
+  read_moduli("unloading_modulus_MPa", loop, true, &MeasuredCurve::unloading_modulus_Pa);
+  read_moduli("reloading_modulus_MPa", loop, true, &MeasuredCurve::reloading_modulus_Pa);
   read_moduli("affine_modulus_MPa",
               "affine moduli [MPa] after consolidation (the shear runs' "
               "consolidated_affine_modulus_Pa / 1e6)",
-              &MeasuredCurve::affine_modulus_Pa);
+              false, &MeasuredCurve::affine_modulus_Pa);
 }
 
 } // namespace
