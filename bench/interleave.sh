@@ -34,7 +34,10 @@ done
 
 vals="$(mktemp)"
 trap 'rm -f "$vals"' EXIT
+# shellcheck source=bench/cpu_others.sh
+source "$(dirname "${BASH_SOURCE[0]}")/cpu_others.sh"
 echo "interleave.sh: $(date -u '+%F %T') UTC, cores $cores, $rounds rounds, bench $*"
+cpu_others_start
 for r in $(seq 1 "$rounds"); do
   for i in "${!bins[@]}"; do
     v="$(taskset -c "$cores" "${bins[$i]}" bench "$@" | awk '/^particle_steps_per_s:/{print $2}')"
@@ -59,3 +62,4 @@ for i, n in enumerate(names):
         print(f"{n}: median {m:.4g}; / first, paired by round: x{st.median(q):.3f} (" +
               ", ".join(f"{x:.3f}" for x in q) + ")")
 PY
+cpu_others_report interleave.sh

@@ -60,6 +60,9 @@ rec() { # key round value
 
 echo "side_by_side.sh: $(date -u '+%F %T') UTC, $bin, $rounds rounds, load $(cut -d' ' -f1-3 /proc/loadavg)"
 echo "side_by_side.sh: $("$bin" bench "${pk[@]}" --steps 1 --warmup 0 --threads 1 | grep -E '^(cpu|simd):' | paste -sd' ')"
+# shellcheck source=bench/cpu_others.sh
+source "$here/cpu_others.sh"
+cpu_others_start
 for r in $(seq 1 "$rounds"); do
   rec c1 "$r" "$(centridem_run 0 --law peers --threads 1 --steps "$psteps")"
   rec c1s "$r" "$(centridem_run 0 --law peers --threads 1 --steps "$psteps" --skin 5e-5)"
@@ -97,4 +100,5 @@ print(f"| paper's law, packed, 1 thread | {show(row('paper'))} | | | | |")
 print(f"| flowing column, 1 core | {show(row('f1'))} | {show(row('f1s'))} | | {show(row('lammps_flow'))} | "
       f"{ratio([vals['f1'][r] / vals['lammps_flow'][r] for r in R])} / {ratio([vals['f1s'][r] / vals['lammps_flow'][r] for r in R])} |")
 PY
+cpu_others_report side_by_side.sh
 echo "side_by_side.sh: done $(date -u '+%F %T') UTC"
