@@ -54,6 +54,7 @@ struct ContactStage {
   static constexpr std::size_t kCap = kStage + kLanes;
   std::uint32_t count = 0;
   alignas(64) std::uint32_t entry[kCap];
+  alignas(64) std::uint32_t row[kCap]; // particle i (end 1)
   alignas(64) std::uint16_t props[kCap];
   // Inputs: centre-to-centre vector [m] and its length [m]; radii [m];
   // masses [kg]; v_j - v_i [m/s]; spins [rad/s].
@@ -79,6 +80,7 @@ struct WallStage {
   static constexpr std::size_t kCap = kStage + kLanes;
   std::uint32_t count = 0;
   alignas(64) std::uint32_t entry[kCap];
+  alignas(64) std::uint32_t row[kCap]; // the ball, particle i (end 1)
   alignas(64) std::uint16_t props[kCap];
   // Inputs: unit normal ball -> wall; overlap [m]; lever arm a = r - overlap/2
   // [m]; ball radius [m] and mass [kg]; velocity of the wall's contact point
@@ -311,6 +313,7 @@ template <bool Periodic> void World::compute_contacts_impl() {
         if (overlap > max_overlap * std::min(ri, r[j])) unstable = std::min(unstable, e);
         const std::uint32_t k = count++;
         s.entry[k] = e;
+        s.row[k] = static_cast<std::uint32_t>(i);
         s.props[k] = pr;
         ContactStage::put(s.dx, s.dy, s.dz, k, d);
         s.dist[k] = dist;
@@ -377,6 +380,7 @@ template <bool Periodic> void World::compute_contacts_impl() {
         const double a = r[i] - 0.5 * overlap; // lever arm a n to the contact point [m]
         const std::uint32_t k = count++;
         s.entry[k] = e;
+        s.row[k] = static_cast<std::uint32_t>(i);
         s.props[k] = pr;
         ContactStage::put(s.nx, s.ny, s.nz, k, nrm);
         s.overlap[k] = overlap, s.lever[k] = a, s.r[k] = r[i], s.m[k] = m[i];
@@ -445,13 +449,33 @@ template <bool Periodic> void World::compute_contacts_impl() {
       }
       stage_law_all(stage, props, dt);
       wall_stage_law_all(wall_stage, props, dt);
-      std::uint32_t k = 0, kw = 0;
+      // Flat loops over the rows and then over the staged contacts, each
+      // result subtracted from its row's sums in the arrays: per row the same
+      // order (body and applied loads, ball-ball in entry order, ball-wall),
+      // and no loop per row, whose exit at a varying count would mispredict.
       for (std::size_t row = first; row < i; ++row) {
-        RowSums sum = start_row(row);
-        add_staged(sum, stage, k, bb_.row_offset[row + 1]);
-        add_wall_staged(sum, wall_stage, kw, bw_.row_offset[row + 1]);
+        const RowSums sum = start_row(row);
         P.force[row] = sum.force;
         P.moment[row] = sum.moment;
+      }
+      for (std::uint32_t k = 0; k < stage.count; ++k) {
+        const std::uint32_t e = stage.entry[k], row = stage.row[k];
+        const Vec3 f{stage.fx[k], stage.fy[k], stage.fz[k]};
+        bb_.state[e] = {{stage.fsx[k], stage.fsy[k], stage.fsz[k]},
+                        {stage.mrx[k], stage.mry[k], stage.mrz[k]}};
+        bb_.load_on_2(e) = {f, {stage.m2x[k], stage.m2y[k], stage.m2z[k]}};
+        P.force[row] -= f;
+        P.moment[row] -= Vec3{stage.m1x[k], stage.m1y[k], stage.m1z[k]};
+      }
+      for (std::uint32_t k = 0; k < wall_stage.count; ++k) {
+        const WallStage& s = wall_stage;
+        const std::uint32_t e = s.entry[k], row = s.row[k];
+        const Vec3 f{s.fx[k], s.fy[k], s.fz[k]};
+        const Vec3 nrm{s.nx[k], s.ny[k], s.nz[k]};
+        bw_.state[e] = {{s.fsx[k], s.fsy[k], s.fsz[k]}, {s.mrx[k], s.mry[k], s.mrz[k]}};
+        bw_.force_on_wall[e] = f;
+        P.force[row] -= f;
+        P.moment[row] -= s.lever[k] * cross(nrm, f) + Vec3{s.mx[k], s.my[k], s.mz[k]};
       }
     }
     if (team > 1) contact_split_.record(me, omp_get_wtime() - t_start);

@@ -43,12 +43,13 @@ struct BallBallContacts {
   std::vector<std::uint32_t> incoming_offset; // size n+1
   std::vector<std::uint32_t> incoming;        // entry indices
   std::vector<std::uint32_t> slot_of;         // entry e's slot k in the transpose
+  std::vector<std::uint32_t> slot_owner;      // particle j of slot k (its second end)
   const LoadOn2& load_on_2(std::uint32_t e) const { return on_2[slot_of[e]]; }
   LoadOn2& load_on_2(std::uint32_t e) { return on_2[slot_of[e]]; }
 
   std::size_t entries() const { return other.size(); }
   static constexpr std::size_t bytes_per_entry() {
-    return sizeof(std::uint32_t) * 3 + sizeof(std::uint16_t) + sizeof(ContactState) +
+    return sizeof(std::uint32_t) * 4 + sizeof(std::uint16_t) + sizeof(ContactState) +
            sizeof(LoadOn2);
   }
 };

@@ -35,17 +35,20 @@ void World::integrate() {
     if (me == 0) team = size;
     const double t_start = size > 1 ? omp_get_wtime() : 0.0;
     const auto [first_row, end_row] = integration_split_.block(me, size, n);
+    // Own side was summed by compute_contacts; add the forces from the
+    // contacts in which i is the second end (zero for non-touching entries),
+    // in transpose order: one sequential run over the block's slots, in one
+    // loop (a loop per particle ends at a different count each time, and
+    // mispredicts its exit about once per particle).
+    const std::uint32_t k_end = bb_.incoming_offset[end_row];
+    for (std::uint32_t k = bb_.incoming_offset[first_row]; k < k_end; ++k) {
+      const std::uint32_t j = bb_.slot_owner[k];
+      P.force[j] += bb_.on_2[k].force;
+      P.moment[j] += bb_.on_2[k].moment;
+    }
     for (std::size_t i = first_row; i < end_row; ++i) {
-      // Own side was summed by compute_contacts; add the forces from the
-      // contacts in which i is the second end (zero for non-touching entries).
-      Vec3 f = P.force[i];
-      Vec3 mo = P.moment[i];
-      for (std::uint32_t k = bb_.incoming_offset[i]; k < bb_.incoming_offset[i + 1]; ++k) {
-        f += bb_.on_2[k].force; // in transpose order: one sequential run
-        mo += bb_.on_2[k].moment;
-      }
-      P.force[i] = f;
-      P.moment[i] = mo;
+      const Vec3 f = P.force[i];
+      const Vec3 mo = P.moment[i];
       // Central differences (PFC): v(t+dt/2) = v(t-dt/2) + (F + Fd)/m dt.
       // Undamped runs (alpha = 0: the flowing workloads) skip the damping
       // force, which is then zero: the same sums, bit for bit, for finite F.
