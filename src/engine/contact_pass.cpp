@@ -56,9 +56,9 @@ struct ContactStage {
   alignas(64) std::uint32_t entry[kCap];
   alignas(64) std::uint32_t row[kCap]; // particle i (end 1)
   alignas(64) std::uint16_t props[kCap];
-  // Inputs: centre-to-centre vector [m] and its length [m]; radii [m];
-  // masses [kg]; v_j - v_i [m/s]; spins [rad/s].
-  alignas(64) double dx[kCap], dy[kCap], dz[kCap], dist[kCap];
+  // Inputs: centre-to-centre vector [m] and its squared length [m^2]; radii
+  // [m]; masses [kg]; v_j - v_i [m/s]; spins [rad/s].
+  alignas(64) double dx[kCap], dy[kCap], dz[kCap], dist2[kCap];
   alignas(64) double r1[kCap], r2[kCap], m1[kCap], m2[kCap];
   alignas(64) double vx[kCap], vy[kCap], vz[kCap];
   alignas(64) double w1x[kCap], w1y[kCap], w1z[kCap], w2x[kCap], w2y[kCap], w2z[kCap];
@@ -68,6 +68,8 @@ struct ContactStage {
   // moment loses, a1 (n x F) + M [N m].
   alignas(64) double fx[kCap], fy[kCap], fz[kCap], m2x[kCap], m2y[kCap], m2z[kCap];
   alignas(64) double m1x[kCap], m1y[kCap], m1z[kCap];
+  // What the law found of the contact (kInForce, kEnded, kTooDeep).
+  alignas(64) double status[kCap];
 
   template <class T> static void put(double* a, double* b, double* c, std::uint32_t k, const T& v) {
     a[k] = v.x, b[k] = v.y, c[k] = v.z;
@@ -93,6 +95,12 @@ struct WallStage {
   alignas(64) double fx[kCap], fy[kCap], fz[kCap], mx[kCap], my[kCap], mz[kCap];
 };
 
+// A staged ball-ball contact's status after the law: in force; ended (the
+// surfaces apart beyond the attraction's reach, or the centres coincide: the
+// contact is removed, its results unused); or in force and overlapping by
+// more than the guard allows (the run stops unstable).
+constexpr double kInForce = 0.0, kEnded = 1.0, kTooDeep = 2.0;
+
 using LaneV = LaneVec<ContactLanes>;
 using LaneM = LaneMask<ContactLanes>;
 
@@ -115,12 +123,18 @@ inline void stage_store(double* a, double* b, double* c, std::uint32_t k, const 
 // properties cp; with a mask, only the lanes it holds are stored. The
 // geometry is formed exactly as a scalar pass would form it.
 void stage_law(ContactStage& s, std::uint32_t k, const ContactProperties& cp, double dt,
-               const LaneM* only = nullptr) {
+               double max_overlap, const LaneM* only = nullptr) {
   using T = ContactLanes;
-  const T dist = stage_load(s.dist, k);
+  // The centre distance here, a batch at once, rather than in the find
+  // pass, where each contact's square root delayed its own next steps.
+  const T dist = sqrt(stage_load(s.dist2, k));
   const T r1 = stage_load(s.r1, k), r2 = stage_load(s.r2, k);
   const LaneV nrm = stage_load(s.dx, s.dy, s.dz, k) * (T(1.0) / dist);
   const T overlap = r1 + r2 - dist;
+  const LaneM active = contact_active(cp, overlap) & (dist != T(0.0));
+  const LaneM too_deep = overlap > T(max_overlap) * lane_min(r1, r2);
+  stage_store(s.status, k,
+              select(active, select(too_deep, T(kTooDeep), T(kInForce)), T(kEnded)), only);
   // Lever arms from the centres to the contact point: a1 n and -a2 n [m].
   // With them, the relative velocity at the contact point
   // (v_j + w_j x (-a2 n)) - (v_i + w_i x a1 n) is (v_j - v_i) - (a1 w_i + a2 w_j) x n,
@@ -212,14 +226,15 @@ template <class Stage> std::uint32_t pad_stage(Stage& s, std::initializer_list<d
   return padded;
 }
 
-void stage_law_all(ContactStage& s, const ContactProperties* props, double dt) {
+void stage_law_all(ContactStage& s, const ContactProperties* props, double dt,
+                   double max_overlap) {
   if (s.count == 0) return;
   const std::uint32_t padded = pad_stage(
-      s, {s.dx,  s.dy,  s.dz,  s.dist, s.r1,  s.r2,  s.m1,  s.m2,  s.vx,  s.vy,  s.vz, s.w1x,
+      s, {s.dx,  s.dy,  s.dz,  s.dist2, s.r1,  s.r2,  s.m1,  s.m2,  s.vx,  s.vy,  s.vz, s.w1x,
           s.w1y, s.w1z, s.w2x, s.w2y,  s.w2z, s.fsx, s.fsy, s.fsz, s.mrx, s.mry, s.mrz});
   law_in_batches(padded, s.props, props,
                  [&](std::uint32_t k0, const ContactProperties& cp, const LaneM* only) {
-                   stage_law(s, k0, cp, dt, only);
+                   stage_law(s, k0, cp, dt, max_overlap, only);
                  });
 }
 
@@ -301,22 +316,15 @@ template <bool Periodic> void World::compute_contacts_impl() {
           pr = graded ? graded_default(xi.z + 0.5 * d.z) : bb_default;
           bb_.state[e] = ContactState{};
         }
-        const double dist = std::sqrt(dist2);
-        const double overlap = ri + r[j] - dist;
-        if (!contact_active(props[pr], overlap) || dist == 0.0) { // contact ends
-          bb_.properties[e] = kNoContact;
-          bb_.state[e] = ContactState{};
-          bb_.load_on_2(e) = {};
-          continue;
-        }
+        // Staged; whether it still holds (its distance against the reach of
+        // its property set) is the law's to say (stage_law: status).
         bb_.properties[e] = pr;
-        if (overlap > max_overlap * std::min(ri, r[j])) unstable = std::min(unstable, e);
         const std::uint32_t k = count++;
         s.entry[k] = e;
         s.row[k] = static_cast<std::uint32_t>(i);
         s.props[k] = pr;
         ContactStage::put(s.dx, s.dy, s.dz, k, d);
-        s.dist[k] = dist;
+        s.dist2[k] = dist2;
         s.r1[k] = ri, s.r2[k] = r[j], s.m1[k] = mi, s.m2[k] = m[j];
         ContactStage::put(s.vx, s.vy, s.vz, k, v[j] - vi);
         ContactStage::put(s.w1x, s.w1y, s.w1z, k, wi);
@@ -342,10 +350,25 @@ template <bool Periodic> void World::compute_contacts_impl() {
                                P.applied_moment[i]}
                      : RowSums{P.mass[i] * field_.acceleration(x[i], v[i]) + Vec3{}, Vec3{}};
     };
+    // A staged contact the law did not find plainly in force: an ended one
+    // is removed (false: its results are not used); one too deep is noted for
+    // the instability report (true: it still acts).
+    auto end_or_flag = [&](const ContactStage& s, std::uint32_t k) {
+      const std::uint32_t e = s.entry[k];
+      if (s.status[k] == kTooDeep) {
+        unstable = std::min(unstable, e);
+        return true;
+      }
+      bb_.properties[e] = kNoContact;
+      bb_.state[e] = ContactState{};
+      bb_.load_on_2(e) = {};
+      return false;
+    };
     auto add_staged = [&](RowSums& sum, const ContactStage& s, std::uint32_t& k,
                           std::uint32_t e_end) {
       for (; k < s.count && s.entry[k] < e_end; ++k) {
         const std::uint32_t e = s.entry[k];
+        if (s.status[k] != kInForce && !end_or_flag(s, k)) continue;
         const Vec3 f{s.fx[k], s.fy[k], s.fz[k]};
         bb_.state[e] = {{s.fsx[k], s.fsy[k], s.fsz[k]}, {s.mrx[k], s.mry[k], s.mrz[k]}};
         bb_.load_on_2(e) = {f, {s.m2x[k], s.m2y[k], s.m2z[k]}};
@@ -418,7 +441,7 @@ template <bool Periodic> void World::compute_contacts_impl() {
           const std::uint32_t e1 = std::min(bb_.row_offset[i + 1], e0 + kStage);
           stage.count = 0;
           find(i, e0, e1, stage);
-          stage_law_all(stage, props, dt);
+          stage_law_all(stage, props, dt, max_overlap);
           std::uint32_t k = 0;
           add_staged(sum, stage, k, e1);
         }
@@ -447,7 +470,7 @@ template <bool Periodic> void World::compute_contacts_impl() {
           find_walls(i, bw_.row_offset[i], bw_.row_offset[i + 1], wall_stage);
         ++i;
       }
-      stage_law_all(stage, props, dt);
+      stage_law_all(stage, props, dt, max_overlap);
       wall_stage_law_all(wall_stage, props, dt);
       // Flat loops over the rows and then over the staged contacts, each
       // result subtracted from its row's sums in the arrays: per row the same
@@ -460,6 +483,7 @@ template <bool Periodic> void World::compute_contacts_impl() {
       }
       for (std::uint32_t k = 0; k < stage.count; ++k) {
         const std::uint32_t e = stage.entry[k], row = stage.row[k];
+        if (stage.status[k] != kInForce && !end_or_flag(stage, k)) continue;
         const Vec3 f{stage.fx[k], stage.fy[k], stage.fz[k]};
         bb_.state[e] = {{stage.fsx[k], stage.fsy[k], stage.fsz[k]},
                         {stage.mrx[k], stage.mry[k], stage.mrz[k]}};
