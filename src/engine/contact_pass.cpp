@@ -361,7 +361,7 @@ template <bool Periodic> void World::compute_contacts_impl() {
       }
       bb_.properties[e] = kNoContact;
       bb_.state[e] = ContactState{};
-      bb_.load_on_2(e) = {};
+      bb_.on_2[e] = {};
       return false;
     };
     auto add_staged = [&](RowSums& sum, const ContactStage& s, std::uint32_t& k,
@@ -371,7 +371,7 @@ template <bool Periodic> void World::compute_contacts_impl() {
         if (s.status[k] != kInForce && !end_or_flag(s, k)) continue;
         const Vec3 f{s.fx[k], s.fy[k], s.fz[k]};
         bb_.state[e] = {{s.fsx[k], s.fsy[k], s.fsz[k]}, {s.mrx[k], s.mry[k], s.mrz[k]}};
-        bb_.load_on_2(e) = {f, {s.m2x[k], s.m2y[k], s.m2z[k]}};
+        bb_.on_2[e] = {f, {s.m2x[k], s.m2y[k], s.m2z[k]}};
         sum.force -= f;
         sum.moment -= Vec3{s.m1x[k], s.m1y[k], s.m1z[k]};
       }
@@ -487,7 +487,7 @@ template <bool Periodic> void World::compute_contacts_impl() {
         const Vec3 f{stage.fx[k], stage.fy[k], stage.fz[k]};
         bb_.state[e] = {{stage.fsx[k], stage.fsy[k], stage.fsz[k]},
                         {stage.mrx[k], stage.mry[k], stage.mrz[k]}};
-        bb_.load_on_2(e) = {f, {stage.m2x[k], stage.m2y[k], stage.m2z[k]}};
+        bb_.on_2[e] = {f, {stage.m2x[k], stage.m2y[k], stage.m2z[k]}};
         P.force[row] -= f;
         P.moment[row] -= Vec3{stage.m1x[k], stage.m1y[k], stage.m1z[k]};
       }

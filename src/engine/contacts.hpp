@@ -30,22 +30,20 @@ struct BallBallContacts {
   std::vector<ContactState> state;       // history
   std::vector<std::uint8_t> image;       // periodic image code of j (empty if not periodic)
   // This step's force [N] and total moment [N m] on j (zero when not
-  // touching), side by side, one record per entry, stored in the order of
-  // the transpose (entry e's record is on_2[slot_of[e]]): the contact pass
-  // writes the touching entries' records where integrate() then reads every
-  // record of j in one sequential run, incoming_offset[j] .. [j + 1]. The
-  // row owner i sums its own side directly.
+  // touching), side by side, one record per entry, in entry order: the
+  // contact pass writes them in one forward run; integrate() adds them to
+  // each j in increasing entry order (by entries with one thread, by the
+  // transpose with more: the same order). The row owner i sums its own side
+  // directly.
   struct LoadOn2 {
     Vec3 force, moment;
   };
   std::vector<LoadOn2> on_2;
-  // Transpose: for particle j, the entries in which it is the second end.
+  // Transpose: for particle j, the entries in which it is the second end
+  // (in increasing entry order), and the particle j of each slot.
   std::vector<std::uint32_t> incoming_offset; // size n+1
   std::vector<std::uint32_t> incoming;        // entry indices
-  std::vector<std::uint32_t> slot_of;         // entry e's slot k in the transpose
   std::vector<std::uint32_t> slot_owner;      // particle j of slot k (its second end)
-  const LoadOn2& load_on_2(std::uint32_t e) const { return on_2[slot_of[e]]; }
-  LoadOn2& load_on_2(std::uint32_t e) { return on_2[slot_of[e]]; }
 
   std::size_t entries() const { return other.size(); }
   static constexpr std::size_t bytes_per_entry() {

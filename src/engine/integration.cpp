@@ -40,11 +40,19 @@ void World::integrate() {
     // in transpose order: one sequential run over the block's slots, in one
     // loop (a loop per particle ends at a different count each time, and
     // mispredicts its exit about once per particle).
-    const std::uint32_t k_end = bb_.incoming_offset[end_row];
-    for (std::uint32_t k = bb_.incoming_offset[first_row]; k < k_end; ++k) {
-      const std::uint32_t j = bb_.slot_owner[k];
-      P.force[j] += bb_.on_2[k].force;
-      P.moment[j] += bb_.on_2[k].moment;
+    if (size == 1) {
+      for (std::uint32_t e = 0; e < bb_.entries(); ++e) {
+        const std::uint32_t j = bb_.other[e];
+        P.force[j] += bb_.on_2[e].force;
+        P.moment[j] += bb_.on_2[e].moment;
+      }
+    } else {
+      const std::uint32_t k_end = bb_.incoming_offset[end_row];
+      for (std::uint32_t k = bb_.incoming_offset[first_row]; k < k_end; ++k) {
+        const std::uint32_t j = bb_.slot_owner[k];
+        P.force[j] += bb_.on_2[bb_.incoming[k]].force;
+        P.moment[j] += bb_.on_2[bb_.incoming[k]].moment;
+      }
     }
     for (std::size_t i = first_row; i < end_row; ++i) {
       const Vec3 f = P.force[i];

@@ -426,14 +426,12 @@ void World::rebuild(std::vector<std::uint32_t> candidates) {
   std::partial_sum(bb.incoming_offset.begin(), bb.incoming_offset.end(),
                    bb.incoming_offset.begin());
   size_list(bb.incoming, entries);
-  size_list(bb.slot_of, entries);
   size_list(bb.slot_owner, entries);
   {
     std::vector<std::uint32_t> fill(bb.incoming_offset.begin(), bb.incoming_offset.end() - 1);
     for (std::size_t e = 0; e < entries; ++e) {
       const std::uint32_t k = fill[bb.other[e]]++;
       bb.incoming[k] = static_cast<std::uint32_t>(e);
-      bb.slot_of[e] = k;
       bb.slot_owner[k] = bb.other[e];
     }
   }
