@@ -129,7 +129,7 @@ inline double attraction_potential(const ContactProperties& p, double overlap_m)
 // (the contact plane turns with the pair; PFC keeps shear force and rolling
 // moment in the contact's local frame, which is this rotation). A zero
 // vector stays zero; one along n (no tangential part left) becomes zero.
-template <class V> V rotate_into_plane(const V& v, const V& n) {
+template <class V> [[gnu::always_inline]] inline V rotate_into_plane(const V& v, const V& n) {
   using T = decltype(dot(v, n));
   const T m0 = norm2(v);
   const T vn = dot(v, n);
