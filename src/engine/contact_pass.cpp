@@ -5,13 +5,17 @@
 // Contacts go through the law in SIMD batches (ContactLanes: 8 contacts at
 // once with AVX-512). Each thread walks its block of rows in three passes
 // over a small stage of contacts (one for ball-ball, one for ball-wall):
-//   1. find: for each neighbour entry, the distance; contacts born or ended;
-//      the touching ones copied into the stage (structure of arrays); then
-//      the same for the row's ball-wall entries;
+//   1. find: for each neighbour entry, the squared distance; contacts born;
+//      the ones with a contact copied into the stage (structure of arrays);
+//      then the same for the row's ball-wall entries;
 //   2. law: each stage in batches of one property set, lane by lane the same
-//      IEEE operations as the scalar law (physics/lanes.hpp);
-//   3. apply: per row, in entry order, the results summed onto the row's
-//      particle and stored in the entries, then its ball-wall results.
+//      IEEE operations as the scalar law (physics/lanes.hpp); the batch also
+//      takes the square root of the distance and says which contacts ended
+//      and which overlap too deeply;
+//   3. apply: in flat loops (not one per row: its exit at a varying count
+//      mispredicts), each row's sums started from its body and applied
+//      loads, then the staged results subtracted in stage order (per row,
+//      entry order) and stored in the entries, then the ball-wall results.
 // The sums are made in the same order as a single scalar pass would make
 // them, so the bits do not depend on the batching or the thread count.
 #include "engine/thread_count.hpp"
@@ -133,8 +137,8 @@ void stage_law(ContactStage& s, std::uint32_t k, const ContactProperties& cp, do
   const T overlap = r1 + r2 - dist;
   const LaneM active = contact_active(cp, overlap) & (dist != T(0.0));
   const LaneM too_deep = overlap > T(max_overlap) * lane_min(r1, r2);
-  stage_store(s.status, k,
-              select(active, select(too_deep, T(kTooDeep), T(kInForce)), T(kEnded)), only);
+  stage_store(s.status, k, select(active, select(too_deep, T(kTooDeep), T(kInForce)), T(kEnded)),
+              only);
   // Lever arms from the centres to the contact point: a1 n and -a2 n [m].
   // With them, the relative velocity at the contact point
   // (v_j + w_j x (-a2 n)) - (v_i + w_i x a1 n) is (v_j - v_i) - (a1 w_i + a2 w_j) x n,
@@ -226,12 +230,11 @@ template <class Stage> std::uint32_t pad_stage(Stage& s, std::initializer_list<d
   return padded;
 }
 
-void stage_law_all(ContactStage& s, const ContactProperties* props, double dt,
-                   double max_overlap) {
+void stage_law_all(ContactStage& s, const ContactProperties* props, double dt, double max_overlap) {
   if (s.count == 0) return;
   const std::uint32_t padded = pad_stage(
       s, {s.dx,  s.dy,  s.dz,  s.dist2, s.r1,  s.r2,  s.m1,  s.m2,  s.vx,  s.vy,  s.vz, s.w1x,
-          s.w1y, s.w1z, s.w2x, s.w2y,  s.w2z, s.fsx, s.fsy, s.fsz, s.mrx, s.mry, s.mrz});
+          s.w1y, s.w1z, s.w2x, s.w2y,   s.w2z, s.fsx, s.fsy, s.fsz, s.mrx, s.mry, s.mrz});
   law_in_batches(padded, s.props, props,
                  [&](std::uint32_t k0, const ContactProperties& cp, const LaneM* only) {
                    stage_law(s, k0, cp, dt, max_overlap, only);
@@ -283,9 +286,8 @@ template <bool Periodic> void World::compute_contacts_impl() {
   // 1.6x from 1 to 2 threads; contiguous blocks 1.9x). The blocks follow the
   // measured time of each (engine/work_split.hpp). The row owner i sums
   // its own side and leaves the force and moment on j in the entry's record
-  // (stored in the transpose's order); integrate() gathers those in a fixed
-  // order. No two threads write the
-  // same memory, and no sum depends on the thread count.
+  // (on_2, entry order); integrate() adds those in a fixed order. No two
+  // threads write the same memory, and no sum depends on the thread count.
 #pragma omp parallel num_threads(threads) reduction(min : unstable)
   {
     const int team = omp_get_num_threads();

@@ -16,8 +16,8 @@ namespace centridem {
 
 inline constexpr std::uint16_t kNoContact = 0xFFFF;
 // Touching ball-ball contacts the contact pass stages at once (contact_pass.cpp:
-// 256 bytes each, 35 KB in all, inside a 48 KB first-level cache), and
-// ball-wall contacts likewise (a stage of the same capacity, 206 bytes each,
+// 274 bytes each, 37 KB in all, inside a 48 KB first-level cache), and
+// ball-wall contacts likewise (a stage of the same capacity, 210 bytes each,
 // of which the few wall contacts of a block of rows touch only the first
 // lines). A row with more entries of either kind than this goes through the
 // stages in pieces.

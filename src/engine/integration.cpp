@@ -36,10 +36,12 @@ void World::integrate() {
     const double t_start = size > 1 ? omp_get_wtime() : 0.0;
     const auto [first_row, end_row] = integration_split_.block(me, size, n);
     // Own side was summed by compute_contacts; add the forces from the
-    // contacts in which i is the second end (zero for non-touching entries),
-    // in transpose order: one sequential run over the block's slots, in one
-    // loop (a loop per particle ends at a different count each time, and
-    // mispredicts its exit about once per particle).
+    // contacts in which j is the second end (zero for non-touching entries),
+    // in increasing entry order, in one flat loop (a loop per particle ends
+    // at a different count each time and mispredicts its exit about once per
+    // particle). One thread owns every j: one forward run over the entries.
+    // With more, each thread takes its own block's j through the transpose
+    // (slots in increasing entry order): the same order, the same bits.
     if (size == 1) {
       for (std::uint32_t e = 0; e < bb_.entries(); ++e) {
         const std::uint32_t j = bb_.other[e];

@@ -263,8 +263,8 @@ std::vector<ContactView> World::ball_ball_contacts() const {
       const double ov = p_.radius[i] + p_.radius[j] - dist;
       const Vec3 nrm = d / dist;
       out.push_back({static_cast<std::uint32_t>(i), j,
-                     p_.position[i] + nrm * (p_.radius[i] - 0.5 * ov), nrm, bb_.on_2[e].force,
-                     ov, bb_.properties[e]});
+                     p_.position[i] + nrm * (p_.radius[i] - 0.5 * ov), nrm, bb_.on_2[e].force, ov,
+                     bb_.properties[e]});
     }
   }
   return out;
