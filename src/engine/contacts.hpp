@@ -47,7 +47,7 @@ struct BallBallContacts {
 
   std::size_t entries() const { return other.size(); }
   static constexpr std::size_t bytes_per_entry() {
-    return sizeof(std::uint32_t) * 4 + sizeof(std::uint16_t) + sizeof(ContactState) +
+    return sizeof(std::uint32_t) * 3 + sizeof(std::uint16_t) + sizeof(ContactState) +
            sizeof(LoadOn2);
   }
 };
