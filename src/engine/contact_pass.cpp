@@ -337,10 +337,12 @@ template <bool Periodic> void World::compute_contacts_impl() {
       s.count = count;
     };
 
-    // Pass 3 for row i, in three steps: the row's sums start from the body
-    // and applied loads; the staged results of its entries are added in entry
-    // order (from stage index k on, for entries below e_end); then its ball-wall
-    // contacts (end 1 = ball, end 2 = wall) are added and the sums stored.
+    // Pass 3, in flat loops (not one per row, whose exit at a varying count
+    // mispredicts): the rows' sums start from the body and applied loads in
+    // the arrays; each staged ball-ball result is subtracted from its row's
+    // sums in stage order (per row, entry order), then each ball-wall result
+    // (end 1 = ball, end 2 = wall): per row the order of a scalar pass, also
+    // when a long row goes through the stages in pieces.
     struct RowSums {
       Vec3 force, moment;
     };
@@ -366,16 +368,22 @@ template <bool Periodic> void World::compute_contacts_impl() {
       bb_.on_2[e] = {};
       return false;
     };
-    auto add_staged = [&](RowSums& sum, const ContactStage& s, std::uint32_t& k,
-                          std::uint32_t e_end) {
-      for (; k < s.count && s.entry[k] < e_end; ++k) {
-        const std::uint32_t e = s.entry[k];
+    auto start_rows = [&](std::size_t first, std::size_t last) {
+      for (std::size_t row = first; row < last; ++row) {
+        const RowSums sum = start_row(row);
+        P.force[row] = sum.force;
+        P.moment[row] = sum.moment;
+      }
+    };
+    auto apply_staged = [&](const ContactStage& s) {
+      for (std::uint32_t k = 0; k < s.count; ++k) {
+        const std::uint32_t e = s.entry[k], row = s.row[k];
         if (s.status[k] != kInForce && !end_or_flag(s, k)) continue;
         const Vec3 f{s.fx[k], s.fy[k], s.fz[k]};
         bb_.state[e] = {{s.fsx[k], s.fsy[k], s.fsz[k]}, {s.mrx[k], s.mry[k], s.mrz[k]}};
         bb_.on_2[e] = {f, {s.m2x[k], s.m2y[k], s.m2z[k]}};
-        sum.force -= f;
-        sum.moment -= Vec3{s.m1x[k], s.m1y[k], s.m1z[k]};
+        P.force[row] -= f;
+        P.moment[row] -= Vec3{s.m1x[k], s.m1y[k], s.m1z[k]};
       }
     };
     // Pass 1 for ball-wall entries e_begin .. e_end - 1 of row i (end 1 =
@@ -416,18 +424,15 @@ template <bool Periodic> void World::compute_contacts_impl() {
       }
       s.count = count;
     };
-    // Pass 3 for a row's staged ball-wall results, summed after its ball-ball
-    // ones.
-    auto add_wall_staged = [&](RowSums& sum, const WallStage& s, std::uint32_t& k,
-                               std::uint32_t e_end) {
-      for (; k < s.count && s.entry[k] < e_end; ++k) {
-        const std::uint32_t e = s.entry[k];
+    auto apply_wall_staged = [&](const WallStage& s) {
+      for (std::uint32_t k = 0; k < s.count; ++k) {
+        const std::uint32_t e = s.entry[k], row = s.row[k];
         const Vec3 f{s.fx[k], s.fy[k], s.fz[k]};
         const Vec3 nrm{s.nx[k], s.ny[k], s.nz[k]};
         bw_.state[e] = {{s.fsx[k], s.fsy[k], s.fsz[k]}, {s.mrx[k], s.mry[k], s.mrz[k]}};
         bw_.force_on_wall[e] = f;
-        sum.force -= f;
-        sum.moment -= s.lever[k] * cross(nrm, f) + Vec3{s.mx[k], s.my[k], s.mz[k]};
+        P.force[row] -= f;
+        P.moment[row] -= s.lever[k] * cross(nrm, f) + Vec3{s.mx[k], s.my[k], s.mz[k]};
       }
     };
 
@@ -438,30 +443,26 @@ template <bool Periodic> void World::compute_contacts_impl() {
         // A row longer than the stage (a large grain among fine ones): its
         // entries go through the stage kStage at a time, its sums carried on
         // across the pieces in entry order; then its ball-wall entries alike.
-        RowSums sum = start_row(i);
+        start_rows(i, i + 1);
         for (std::uint32_t e0 = bb_.row_offset[i]; e0 < bb_.row_offset[i + 1]; e0 += kStage) {
           const std::uint32_t e1 = std::min(bb_.row_offset[i + 1], e0 + kStage);
           stage.count = 0;
           find(i, e0, e1, stage);
           stage_law_all(stage, props, dt, max_overlap);
-          std::uint32_t k = 0;
-          add_staged(sum, stage, k, e1);
+          apply_staged(stage);
         }
         for (std::uint32_t e0 = bw_.row_offset[i]; e0 < bw_.row_offset[i + 1]; e0 += kStage) {
           const std::uint32_t e1 = std::min(bw_.row_offset[i + 1], e0 + kStage);
           wall_stage.count = 0;
           find_walls(i, e0, e1, wall_stage);
           wall_stage_law_all(wall_stage, props, dt);
-          std::uint32_t k = 0;
-          add_wall_staged(sum, wall_stage, k, e1);
+          apply_wall_staged(wall_stage);
         }
-        P.force[i] = sum.force;
-        P.moment[i] = sum.moment;
         ++i;
         continue;
       }
       // Stage whole rows while they surely fit (a row stages at most its
-      // entries), run the law on them, then apply them row by row.
+      // entries), run the law on them, then apply them.
       stage.count = 0;
       wall_stage.count = 0;
       const std::size_t first = i;
@@ -474,35 +475,9 @@ template <bool Periodic> void World::compute_contacts_impl() {
       }
       stage_law_all(stage, props, dt, max_overlap);
       wall_stage_law_all(wall_stage, props, dt);
-      // Flat loops over the rows and then over the staged contacts, each
-      // result subtracted from its row's sums in the arrays: per row the same
-      // order (body and applied loads, ball-ball in entry order, ball-wall),
-      // and no loop per row, whose exit at a varying count would mispredict.
-      for (std::size_t row = first; row < i; ++row) {
-        const RowSums sum = start_row(row);
-        P.force[row] = sum.force;
-        P.moment[row] = sum.moment;
-      }
-      for (std::uint32_t k = 0; k < stage.count; ++k) {
-        const std::uint32_t e = stage.entry[k], row = stage.row[k];
-        if (stage.status[k] != kInForce && !end_or_flag(stage, k)) continue;
-        const Vec3 f{stage.fx[k], stage.fy[k], stage.fz[k]};
-        bb_.state[e] = {{stage.fsx[k], stage.fsy[k], stage.fsz[k]},
-                        {stage.mrx[k], stage.mry[k], stage.mrz[k]}};
-        bb_.on_2[e] = {f, {stage.m2x[k], stage.m2y[k], stage.m2z[k]}};
-        P.force[row] -= f;
-        P.moment[row] -= Vec3{stage.m1x[k], stage.m1y[k], stage.m1z[k]};
-      }
-      for (std::uint32_t k = 0; k < wall_stage.count; ++k) {
-        const WallStage& s = wall_stage;
-        const std::uint32_t e = s.entry[k], row = s.row[k];
-        const Vec3 f{s.fx[k], s.fy[k], s.fz[k]};
-        const Vec3 nrm{s.nx[k], s.ny[k], s.nz[k]};
-        bw_.state[e] = {{s.fsx[k], s.fsy[k], s.fsz[k]}, {s.mrx[k], s.mry[k], s.mrz[k]}};
-        bw_.force_on_wall[e] = f;
-        P.force[row] -= f;
-        P.moment[row] -= s.lever[k] * cross(nrm, f) + Vec3{s.mx[k], s.my[k], s.mz[k]};
-      }
+      start_rows(first, i);
+      apply_staged(stage);
+      apply_wall_staged(wall_stage);
     }
     if (team > 1) contact_split_.record(me, omp_get_wtime() - t_start);
   }
