@@ -16,12 +16,15 @@ namespace centridem {
 
 inline constexpr std::uint16_t kNoContact = 0xFFFF;
 // Touching ball-ball contacts the contact pass stages at once (contact_pass.cpp:
-// 274 bytes each, 37 KB in all, inside a 48 KB first-level cache), and
-// ball-wall contacts likewise (a stage of the same capacity, 210 bytes each,
-// of which the few wall contacts of a block of rows touch only the first
-// lines). A row with more entries of either kind than this goes through the
-// stages in pieces.
-inline constexpr std::uint32_t kContactStageSize = 128;
+// 274 bytes each, 18 KB in all, a third of the 48 KB first-level cache, which
+// also holds the particles and entries the find pass reads), and ball-wall
+// contacts likewise (a stage of the same capacity, 210 bytes each, of which
+// the few wall contacts of a block of rows touch only the first lines). A row
+// with more entries of either kind than this goes through the stages in
+// pieces. 64 against 128 on the shared packing, measured in an engine that
+// adds the loads on end 2 in the contact pass (branch direct-scatter): x1.03
+// on 1 thread, x1.08 on 2, the flowing column even (docs/results/bench.md).
+inline constexpr std::uint32_t kContactStageSize = 64;
 
 struct BallBallContacts {
   std::vector<std::uint32_t> row_offset; // size n+1

@@ -439,6 +439,7 @@ void World::rebuild(std::vector<std::uint32_t> candidates) {
   bb_ = std::move(bb);
   bw_ = std::move(bw);
   position_at_build_ = p_.position;
+  move_bound_m_ = 0.0;
   std::fill(wall_motion_since_build_.begin(), wall_motion_since_build_.end(), Vec3{});
   for (std::size_t k = 0; k < walls_.size(); ++k) wall_point_at_build_[k] = walls_[k].point;
   dirty_ = false;

@@ -276,6 +276,7 @@ void World::cycle(long steps) {
     return std::bit_cast<std::uint64_t>(a.x) | std::bit_cast<std::uint64_t>(a.y) |
            std::bit_cast<std::uint64_t>(a.z);
   };
+  move_bound_m_ = kUnknownMove; // positions may have been changed between calls
   applied_loads_ = std::any_of(p_.applied_force.begin(), p_.applied_force.end(), set) ||
                    std::any_of(p_.applied_moment.begin(), p_.applied_moment.end(), set);
   if (settings_.timestep_s > 0) {

@@ -335,6 +335,13 @@ private:
   // start of each cycle() call (the store changes only between calls): when
   // none does, the contact pass does not stream the two arrays of zeros.
   bool applied_loads_ = true;
+  // An upper bound on how far any particle moved since the lists were built
+  // [m] (kUnknownMove: not known, measure), and the largest move of the last
+  // step [m] (integrate()). The distances are measured once the bound, grown
+  // by twice the last step's move, no longer fits in kMoveBoundRoom of the
+  // half skin.
+  static constexpr double kUnknownMove = 1e300, kMoveBoundRoom = 0.9;
+  double move_bound_m_ = kUnknownMove, last_step_move_m_ = 0.0;
   // Instability report from the contact pass (first offending entry).
   std::uint32_t unstable_entry_ = UINT32_MAX;
   // The threads' blocks of rows in the contact pass and the integration,
