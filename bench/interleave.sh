@@ -8,7 +8,8 @@
 #   e.g.  bash bench/interleave.sh /tmp/before/build/centridem ./build/centridem -- \
 #           --law peers --threads 1 --steps 2000
 #         bash bench/interleave.sh --cores 0,1 A B -- --law peers --threads 2 --steps 2000
-#         bash bench/interleave.sh A B -- --law peers --workload flowing --steps 10000 --warmup 0
+#         bash bench/interleave.sh A B -- --law peers --workload flowing --threads 1 --steps 10000 --warmup 0
+# (one thread count per run: without --threads the flowing workload runs 1 and 2 and prints both).
 # Build the "before" from another commit with `git worktree add /tmp/before <rev>` and `make
 # build` there (the profile and link-time optimisation as `make build` gives them).
 set -euo pipefail
@@ -21,7 +22,7 @@ while [ $# -gt 0 ]; do
     --cores) cores="$2"; shift 2 ;;
     --rounds) rounds="$2"; shift 2 ;;
     --) shift; break ;;
-    -h|--help) sed -n '2,13p' "${BASH_SOURCE[0]}" | sed 's/^# \{0,1\}//'; exit 0 ;;
+    -h|--help) sed -n '2,14p' "${BASH_SOURCE[0]}" | sed 's/^# \{0,1\}//'; exit 0 ;;
     *) bins+=("$1"); shift ;;
   esac
 done
@@ -42,6 +43,7 @@ for r in $(seq 1 "$rounds"); do
   for i in "${!bins[@]}"; do
     v="$(taskset -c "$cores" "${bins[$i]}" bench "$@" | awk '/^particle_steps_per_s:/{print $2}')"
     [ -n "$v" ] || { echo "interleave.sh: '${bins[$i]} bench $*' gave no particle_steps_per_s" >&2; exit 1; }
+    [ "$(wc -l <<<"$v")" -eq 1 ] || { echo "interleave.sh: '${bins[$i]} bench $*' gave $(wc -l <<<"$v") figures (one run per thread count?); give --threads" >&2; exit 2; }
     echo "round $r: ${bins[$i]} $v"
     echo "$i $r $v" >>"$vals"
   done
