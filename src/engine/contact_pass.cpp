@@ -3,8 +3,9 @@
 // (physics/contact_law.hpp), the body force, and the instability guard.
 //
 // Contacts go through the law in SIMD batches (ContactLanes: 8 contacts at
-// once with AVX-512). Each thread walks its block of rows in three passes
-// over a small stage of contacts (one for ball-ball, one for ball-wall):
+// once with AVX-512). Each thread walks its block of rows downwards (from
+// its last row to its first), a few rows at a time, in three passes over a
+// small stage of contacts (one for ball-ball, one for ball-wall):
 //   1. find: for each neighbour entry, the squared distance; contacts born;
 //      the ones with a contact copied into the stage (structure of arrays);
 //      then the same for the row's ball-wall entries;
@@ -14,10 +15,16 @@
 //      and which overlap too deeply;
 //   3. apply: in flat loops (not one per row: its exit at a varying count
 //      mispredicts), each row's sums started from its body and applied
-//      loads, then the staged results subtracted in stage order (per row,
-//      entry order) and stored in the entries, then the ball-wall results.
-// The sums are made in the same order as a single scalar pass would make
-// them, so the bits do not depend on the batching or the thread count.
+//      loads, then its ball-wall results subtracted, then its ball-ball
+//      results in entry order; each ball-ball result is added at once to the
+//      sums of its second end j (j > i: a row already started, in this
+//      stage or an earlier one), unless j lies beyond the thread's block:
+//      then it waits in the entry's record (force_on_2, moment_on_2) for
+//      integrate().
+// So each particle's sums run: body and applied loads, its walls, its own
+// ball-ball contacts in entry order, then its contacts as second end from
+// the highest first end down, whoever makes them: the bits do not depend on
+// the batching or the thread count.
 #include "engine/thread_count.hpp"
 #include "engine/world.hpp"
 
@@ -276,24 +283,31 @@ template <bool Periodic> void World::compute_contacts_impl() {
   }();
   const bool graded = !band_props_.empty(); // defaults graded by height
   const double max_overlap = settings_.max_overlap_fraction;
+  // Contacts whose second end is at or above this row keep their force on it
+  // in force_on_2 (besides those beyond their block): all on the last step
+  // of a cycle() call, none otherwise.
+  const std::size_t keep_all = keep_contact_forces_ ? 0 : n;
   std::uint32_t unstable = UINT32_MAX;
   const int threads = thread_count(settings_, n);
   contact_split_.prepare(threads, n);
+  int used_team = 1;
 
   // Each thread takes one contiguous block of rows: the particles are in cell
   // order, so most neighbours j of a row i lie in the same block and their
   // cache lines stay with one core (chunks of 256 rows dealt in turn gave
   // 1.6x from 1 to 2 threads; contiguous blocks 1.9x). The blocks follow the
   // measured time of each (engine/work_split.hpp). The row owner i sums
-  // its own side and leaves the force and moment on j in the entry's record
-  // (on_2, entry order); integrate() adds those in a fixed order. No two
-  // threads write the same memory, and no sum depends on the thread count.
+  // its own side and adds the force and moment on j to j's sums when j is in
+  // its block, or leaves them in the entry's record, which integrate() adds
+  // after the pass. No two threads write the same memory, and no sum depends
+  // on the thread count.
 #pragma omp parallel num_threads(threads) reduction(min : unstable)
   {
     const int team = omp_get_num_threads();
     const int me = omp_get_thread_num();
     const double t_start = team > 1 ? omp_get_wtime() : 0.0;
     const auto [first_row, end] = contact_split_.block(me, team, n);
+    const std::size_t keep_from = std::min(end, keep_all);
     static thread_local ContactStage stage;
     static thread_local WallStage wall_stage;
     // The passes, defined in the parallel region so that `unstable` is this
@@ -365,7 +379,8 @@ template <bool Periodic> void World::compute_contacts_impl() {
       }
       bb_.properties[e] = kNoContact;
       bb_.state[e] = ContactState{};
-      bb_.on_2[e] = {};
+      bb_.force_on_2[e] = {};
+      bb_.moment_on_2[e] = {};
       return false;
     };
     auto start_rows = [&](std::size_t first, std::size_t last) {
@@ -379,11 +394,22 @@ template <bool Periodic> void World::compute_contacts_impl() {
       for (std::uint32_t k = 0; k < s.count; ++k) {
         const std::uint32_t e = s.entry[k], row = s.row[k];
         if (s.status[k] != kInForce && !end_or_flag(s, k)) continue;
-        const Vec3 f{s.fx[k], s.fy[k], s.fz[k]};
+        const Vec3 f{s.fx[k], s.fy[k], s.fz[k]}, m2{s.m2x[k], s.m2y[k], s.m2z[k]};
         bb_.state[e] = {{s.fsx[k], s.fsy[k], s.fsz[k]}, {s.mrx[k], s.mry[k], s.mrz[k]}};
-        bb_.on_2[e] = {f, {s.m2x[k], s.m2y[k], s.m2z[k]}};
         P.force[row] -= f;
         P.moment[row] -= Vec3{s.m1x[k], s.m1y[k], s.m1z[k]};
+        // End 2: its row was started in an earlier stage or this one (rows go
+        // downwards, j > i), so it takes the load now; beyond the block, the
+        // record waits for integrate(). The force is also kept on the last
+        // step of a cycle() call, for the measurements.
+        const std::uint32_t j = bb_.other[e];
+        if (j >= keep_from) bb_.force_on_2[e] = f;
+        if (j < end) {
+          P.force[j] += f;
+          P.moment[j] += m2;
+        } else {
+          bb_.moment_on_2[e] = m2;
+        }
       }
     };
     // Pass 1 for ball-wall entries e_begin .. e_end - 1 of row i (end 1 =
@@ -436,21 +462,16 @@ template <bool Periodic> void World::compute_contacts_impl() {
       }
     };
 
-    std::size_t i = first_row;
-    while (i < end) {
+    std::size_t top = end; // rows top .. end - 1 are done
+    while (top > first_row) {
+      const std::size_t i = top - 1;
       const std::uint32_t row_length = bb_.row_offset[i + 1] - bb_.row_offset[i];
       if (row_length > kStage || bw_.row_offset[i + 1] - bw_.row_offset[i] > kStage) {
+        --top;
         // A row longer than the stage (a large grain among fine ones): its
         // entries go through the stage kStage at a time, its sums carried on
         // across the pieces in entry order; then its ball-wall entries alike.
         start_rows(i, i + 1);
-        for (std::uint32_t e0 = bb_.row_offset[i]; e0 < bb_.row_offset[i + 1]; e0 += kStage) {
-          const std::uint32_t e1 = std::min(bb_.row_offset[i + 1], e0 + kStage);
-          stage.count = 0;
-          find(i, e0, e1, stage);
-          stage_law_all(stage, props, dt, max_overlap);
-          apply_staged(stage);
-        }
         for (std::uint32_t e0 = bw_.row_offset[i]; e0 < bw_.row_offset[i + 1]; e0 += kStage) {
           const std::uint32_t e1 = std::min(bw_.row_offset[i + 1], e0 + kStage);
           wall_stage.count = 0;
@@ -458,29 +479,40 @@ template <bool Periodic> void World::compute_contacts_impl() {
           wall_stage_law_all(wall_stage, props, dt);
           apply_wall_staged(wall_stage);
         }
-        ++i;
+        for (std::uint32_t e0 = bb_.row_offset[i]; e0 < bb_.row_offset[i + 1]; e0 += kStage) {
+          const std::uint32_t e1 = std::min(bb_.row_offset[i + 1], e0 + kStage);
+          stage.count = 0;
+          find(i, e0, e1, stage);
+          stage_law_all(stage, props, dt, max_overlap);
+          apply_staged(stage);
+        }
         continue;
       }
       // Stage whole rows while they surely fit (a row stages at most its
       // entries), run the law on them, then apply them.
       stage.count = 0;
       wall_stage.count = 0;
-      const std::size_t first = i;
-      while (i < end && stage.count + (bb_.row_offset[i + 1] - bb_.row_offset[i]) <= kStage &&
-             wall_stage.count + (bw_.row_offset[i + 1] - bw_.row_offset[i]) <= kStage) {
-        find(i, bb_.row_offset[i], bb_.row_offset[i + 1], stage);
-        if (bw_.row_offset[i] != bw_.row_offset[i + 1])
-          find_walls(i, bw_.row_offset[i], bw_.row_offset[i + 1], wall_stage);
-        ++i;
+      const std::size_t last = top;
+      while (top > first_row) {
+        const std::size_t row = top - 1;
+        if (stage.count + (bb_.row_offset[row + 1] - bb_.row_offset[row]) > kStage ||
+            wall_stage.count + (bw_.row_offset[row + 1] - bw_.row_offset[row]) > kStage)
+          break;
+        find(row, bb_.row_offset[row], bb_.row_offset[row + 1], stage);
+        if (bw_.row_offset[row] != bw_.row_offset[row + 1])
+          find_walls(row, bw_.row_offset[row], bw_.row_offset[row + 1], wall_stage);
+        --top;
       }
       stage_law_all(stage, props, dt, max_overlap);
       wall_stage_law_all(wall_stage, props, dt);
-      start_rows(first, i);
-      apply_staged(stage);
+      start_rows(top, last);
       apply_wall_staged(wall_stage);
+      apply_staged(stage);
     }
     if (team > 1) contact_split_.record(me, omp_get_wtime() - t_start);
+    if (me == 0) used_team = team;
   }
+  contact_split_.bounds(used_team, n, contact_blocks_);
   contact_split_.rebalance();
   unstable_entry_ = unstable;
 }

@@ -21,9 +21,8 @@ inline constexpr std::uint16_t kNoContact = 0xFFFF;
 // contacts likewise (a stage of the same capacity, 210 bytes each, of which
 // the few wall contacts of a block of rows touch only the first lines). A row
 // with more entries of either kind than this goes through the stages in
-// pieces. 64 against 128 on the shared packing, measured in an engine that
-// adds the loads on end 2 in the contact pass (branch direct-scatter): x1.03
-// on 1 thread, x1.08 on 2, the flowing column even (docs/results/bench.md).
+// pieces. 64 against 128 on the shared packing: x1.03 on 1 thread, x1.08 on
+// 2, the flowing column even (docs/results/bench.md).
 inline constexpr std::uint32_t kContactStageSize = 64;
 
 struct BallBallContacts {
@@ -32,26 +31,24 @@ struct BallBallContacts {
   std::vector<std::uint16_t> properties; // property-set index, or kNoContact
   std::vector<ContactState> state;       // history
   std::vector<std::uint8_t> image;       // periodic image code of j (empty if not periodic)
-  // This step's force [N] and total moment [N m] on j (zero when not
-  // touching), side by side, one record per entry, in entry order: the
-  // contact pass writes them in one forward run; integrate() adds them to
-  // each j in increasing entry order (by entries with one thread, by the
-  // transpose with more: the same order). The row owner i sums its own side
-  // directly.
-  struct LoadOn2 {
-    Vec3 force, moment;
-  };
-  std::vector<LoadOn2> on_2;
+  // The force [N] and total moment [N m] on j of a contact whose j lies
+  // beyond the block of rows its thread had in the contact pass (zero when
+  // not touching): integrate() adds them. Within a block the contact pass
+  // adds them to j's sums directly, and keeps the force here only on the
+  // last step of a cycle() call (the measurements read it then; two arrays,
+  // so that the force alone streams through the cache).
+  std::vector<Vec3> force_on_2, moment_on_2;
   // Transpose: for particle j, the entries in which it is the second end
-  // (in increasing entry order), and the particle j of each slot.
+  // (in increasing entry order, that is, increasing first end i), and the
+  // first end i of each slot.
   std::vector<std::uint32_t> incoming_offset; // size n+1
   std::vector<std::uint32_t> incoming;        // entry indices
-  std::vector<std::uint32_t> slot_owner;      // particle j of slot k (its second end)
+  std::vector<std::uint32_t> slot_row;        // particle i of slot k's entry (its first end)
 
   std::size_t entries() const { return other.size(); }
   static constexpr std::size_t bytes_per_entry() {
     return sizeof(std::uint32_t) * 3 + sizeof(std::uint16_t) + sizeof(ContactState) +
-           sizeof(LoadOn2);
+           2 * sizeof(Vec3);
   }
 };
 

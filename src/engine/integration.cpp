@@ -26,14 +26,14 @@ void World::integrate() {
   // has room for this step's largest move at twice the pace of the last one
   // (and for the walls' moves at their present speed) skips the distances,
   // and their array, this step.
-  const double s_now = skin();
+  const double skin_m = skin();
   double wall_move_ahead = 0.0;
   for (std::size_t k = 0; k < walls_.size(); ++k)
     wall_move_ahead =
         std::max(wall_move_ahead, norm(wall_motion_since_build_[k] + walls_[k].velocity * dt));
   const double bound_ahead = move_bound_m_ + 2.0 * last_step_move_m_;
-  const bool measure_moves = !(2.0 * bound_ahead < kMoveBoundRoom * s_now &&
-                               bound_ahead + wall_move_ahead < kMoveBoundRoom * s_now);
+  const bool measure_moves = !(2.0 * bound_ahead < kMoveBoundRoom * skin_m &&
+                               bound_ahead + wall_move_ahead < kMoveBoundRoom * skin_m);
   double max_move2 = 0.0, max_step2 = 0.0, max_coordinate = 0.0;
   std::uint32_t bad = UINT32_MAX;
 
@@ -42,37 +42,37 @@ void World::integrate() {
   integration_split_.prepare(threads, n);
   // Each thread a contiguous block of rows, moved towards equal measured time
   // (engine/work_split.hpp; a row's sums do not depend on who makes them).
-#pragma omp parallel num_threads(threads) reduction(max                                            \
-                                                    : max_move2, max_step2, max_coordinate)        \
-    reduction(min                                                                                  \
-              : bad)
+  // clang-format off
+#pragma omp parallel num_threads(threads) \
+    reduction(max : max_move2, max_step2, max_coordinate) reduction(min : bad)
+  // clang-format on
   {
     const int size = omp_get_num_threads(), me = omp_get_thread_num();
     if (me == 0) team = size;
     const double t_start = size > 1 ? omp_get_wtime() : 0.0;
     const auto [first_row, end_row] = integration_split_.block(me, size, n);
-    // Own side was summed by compute_contacts; add the forces from the
-    // contacts in which j is the second end (zero for non-touching entries),
-    // in increasing entry order, in one flat loop (a loop per particle ends
-    // at a different count each time and mispredicts its exit about once per
-    // particle). One thread owns every j: one forward run over the entries.
-    // With more, each thread takes its own block's j through the transpose
-    // (slots in increasing entry order): the same order, the same bits.
-    if (size == 1) {
-      for (std::uint32_t e = 0; e < bb_.entries(); ++e) {
-        const std::uint32_t j = bb_.other[e];
-        P.force[j] += bb_.on_2[e].force;
-        P.moment[j] += bb_.on_2[e].moment;
-      }
-    } else {
-      const std::uint32_t k_end = bb_.incoming_offset[end_row];
-      for (std::uint32_t k = bb_.incoming_offset[first_row]; k < k_end; ++k) {
-        const std::uint32_t j = bb_.slot_owner[k];
-        P.force[j] += bb_.on_2[bb_.incoming[k]].force;
-        P.moment[j] += bb_.on_2[bb_.incoming[k]].moment;
-      }
-    }
+    // The contact pass summed each particle's own rows and the loads of the
+    // contacts whose first end lay in the same block (in decreasing row
+    // order). What is left are the records of the contacts whose first end
+    // lay in an earlier block (only with more than one thread): they come
+    // last in that order, added here from the highest row down, so the sums
+    // are those of one thread, bit for bit. In the transpose, a particle's
+    // slots run in increasing row order: those records are its first slots.
+    const std::vector<std::size_t>& blocks = contact_blocks_;
+    std::size_t b = 0; // the contact block of row i
+    const bool records = blocks.size() > 2;
     for (std::size_t i = first_row; i < end_row; ++i) {
+      if (records) {
+        while (i >= blocks[b + 1]) ++b;
+        const std::uint32_t k0 = bb_.incoming_offset[i], k1 = bb_.incoming_offset[i + 1];
+        std::uint32_t k = k0;
+        while (k < k1 && bb_.slot_row[k] < blocks[b]) ++k;
+        while (k > k0) {
+          const std::uint32_t e = bb_.incoming[--k];
+          P.force[i] += bb_.force_on_2[e];
+          P.moment[i] += bb_.moment_on_2[e];
+        }
+      }
       const Vec3 f = P.force[i];
       const Vec3 mo = P.moment[i];
       // Central differences (PFC): v(t+dt/2) = v(t-dt/2) + (F + Fd)/m dt.
@@ -162,7 +162,6 @@ void World::integrate() {
   // passes. The test's outcome is the same as measuring every step.
   const double step_move = std::sqrt(max_step2);
   last_step_move_m_ = step_move;
-  const double s = s_now;
   double max_move = 0.0;
   if (measure_moves) {
     max_move = std::sqrt(max_move2);
@@ -170,14 +169,14 @@ void World::integrate() {
   } else {
     move_bound_m_ += step_move * (1.0 + 1e-12) + 1e-15 * max_coordinate;
     const double b = move_bound_m_ * (1.0 + 1e-9);
-    if (!(2.0 * b <= s && b + max_wall_move <= s)) {
+    if (!(2.0 * b <= skin_m && b + max_wall_move <= skin_m)) {
       for (std::size_t i = 0; i < n; ++i)
         max_move2 = std::max(max_move2, norm2(P.position[i] - position_at_build_[i]));
       max_move = std::sqrt(max_move2);
       move_bound_m_ = max_move;
     }
   }
-  if (2.0 * max_move > s || max_move + max_wall_move > s) dirty_ = true;
+  if (2.0 * max_move > skin_m || max_move + max_wall_move > skin_m) dirty_ = true;
 }
 
 } // namespace centridem

@@ -29,9 +29,9 @@ double World::applied_force_magnitude(std::size_t i) const {
   double a = norm(p_.mass[i] * field_.acceleration(p_.position[i], p_.velocity[i])) +
              norm(p_.applied_force[i]);
   for (std::uint32_t e = bb_.row_offset[i]; e < bb_.row_offset[i + 1]; ++e)
-    if (bb_.properties[e] != kNoContact) a += norm(bb_.on_2[e].force);
+    if (bb_.properties[e] != kNoContact) a += norm(bb_.force_on_2[e]);
   for (std::uint32_t k = bb_.incoming_offset[i]; k < bb_.incoming_offset[i + 1]; ++k)
-    if (bb_.properties[bb_.incoming[k]] != kNoContact) a += norm(bb_.on_2[bb_.incoming[k]].force);
+    if (bb_.properties[bb_.incoming[k]] != kNoContact) a += norm(bb_.force_on_2[bb_.incoming[k]]);
   for (std::uint32_t e = bw_.row_offset[i]; e < bw_.row_offset[i + 1]; ++e)
     if (bw_.properties[e] != kNoContact) a += norm(bw_.force_on_wall[e]);
   return a;
@@ -171,7 +171,7 @@ RegionMeasurement World::measure_region(const Box& box) const {
       const Vec3 d = pair_vector(e, i, j);
       const double dist = norm(d);
       const double ov = r[i] + r[j] - dist;
-      add(d * ((r[i] - 0.5 * ov) / dist), -bb_.on_2[e].force);
+      add(d * ((r[i] - 0.5 * ov) / dist), -bb_.force_on_2[e]);
     }
     for (std::uint32_t k = bb_.incoming_offset[i]; k < bb_.incoming_offset[i + 1]; ++k) {
       const std::uint32_t e = bb_.incoming[k];
@@ -180,7 +180,7 @@ RegionMeasurement World::measure_region(const Box& box) const {
       const Vec3 d = -pair_vector(e, a, i);
       const double dist = norm(d);
       const double ov = r[i] + r[a] - dist;
-      add(d * ((r[i] - 0.5 * ov) / dist), bb_.on_2[e].force);
+      add(d * ((r[i] - 0.5 * ov) / dist), bb_.force_on_2[e]);
     }
     for (std::uint32_t e = bw_.row_offset[i]; e < bw_.row_offset[i + 1]; ++e) {
       if (bw_.properties[e] == kNoContact) continue;
@@ -263,7 +263,7 @@ std::vector<ContactView> World::ball_ball_contacts() const {
       const double ov = p_.radius[i] + p_.radius[j] - dist;
       const Vec3 nrm = d / dist;
       out.push_back({static_cast<std::uint32_t>(i), j,
-                     p_.position[i] + nrm * (p_.radius[i] - 0.5 * ov), nrm, bb_.on_2[e].force, ov,
+                     p_.position[i] + nrm * (p_.radius[i] - 0.5 * ov), nrm, bb_.force_on_2[e], ov,
                      bb_.properties[e]});
     }
   }
@@ -284,7 +284,8 @@ std::size_t World::bytes_per_particle() const {
   bytes +=
       cap(p_.radius) + cap(p_.mass) + cap(p_.inertia) + cap(p_.id) + cap(p_.group) + cap(p_.flags);
   bytes += cap(bb_.row_offset) + cap(bb_.other) + cap(bb_.properties) + cap(bb_.state) +
-           cap(bb_.on_2) + cap(bb_.incoming_offset) + cap(bb_.incoming) + cap(bb_.slot_owner);
+           cap(bb_.force_on_2) + cap(bb_.moment_on_2) + cap(bb_.incoming_offset) +
+           cap(bb_.incoming) + cap(bb_.slot_row);
   bytes += cap(bw_.row_offset) + cap(bw_.wall) + cap(bw_.properties) + cap(bw_.state) +
            cap(bw_.force_on_wall);
   bytes += cap(timestep_scratch_.end2_share) + cap(timestep_scratch_.row_sum) +

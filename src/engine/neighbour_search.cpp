@@ -363,7 +363,8 @@ void World::rebuild(std::vector<std::uint32_t> candidates) {
   size_list(bb.properties, entries);
   size_list(bb.image, periodic ? entries : 0);
   size_list(bb.state, entries);
-  size_list(bb.on_2, entries);
+  size_list(bb.force_on_2, entries);
+  size_list(bb.moment_on_2, entries);
   BallWallContacts bw = std::move(bw_);
   bw.row_offset = std::move(wall_count);
   const std::size_t wall_entries = bw.row_offset[n];
@@ -402,7 +403,8 @@ void World::rebuild(std::vector<std::uint32_t> candidates) {
       }
       bb.properties[e] = carried ? carried->properties : kNoContact;
       bb.state[e] = carried ? carried->state : ContactState{};
-      bb.on_2[e] = {}; // all +0: every index is some entry's (the order of on_2 does not matter)
+      bb.force_on_2[e] = {}; // all +0: every index is some entry's
+      bb.moment_on_2[e] = {};
       ++e;
     }
     std::uint32_t ew = bw.row_offset[i];
@@ -426,14 +428,15 @@ void World::rebuild(std::vector<std::uint32_t> candidates) {
   std::partial_sum(bb.incoming_offset.begin(), bb.incoming_offset.end(),
                    bb.incoming_offset.begin());
   size_list(bb.incoming, entries);
-  size_list(bb.slot_owner, entries);
+  size_list(bb.slot_row, entries);
   {
     std::vector<std::uint32_t> fill(bb.incoming_offset.begin(), bb.incoming_offset.end() - 1);
-    for (std::size_t e = 0; e < entries; ++e) {
-      const std::uint32_t k = fill[bb.other[e]]++;
-      bb.incoming[k] = static_cast<std::uint32_t>(e);
-      bb.slot_owner[k] = bb.other[e];
-    }
+    for (std::size_t i = 0; i < n; ++i)
+      for (std::uint32_t e = bb.row_offset[i]; e < bb.row_offset[i + 1]; ++e) {
+        const std::uint32_t k = fill[bb.other[e]]++;
+        bb.incoming[k] = e;
+        bb.slot_row[k] = static_cast<std::uint32_t>(i);
+      }
   }
 
   bb_ = std::move(bb);

@@ -33,6 +33,13 @@ public:
     return {bound_[k], bound_[k + 1]};
   }
 
+  // The boundaries of all team blocks, as block() gives them (team + 1 rows).
+  void bounds(int team, std::size_t n, std::vector<std::size_t>& out) const {
+    out.resize(static_cast<std::size_t>(team) + 1);
+    for (int k = 0; k < team; ++k) out[static_cast<std::size_t>(k)] = block(k, team, n).first;
+    out.back() = n;
+  }
+
   // Each thread's time in its block [s], written by that thread only, in a
   // pass where team > 1. Outside the parallel region, before the pass:
   // prepare(team, n).

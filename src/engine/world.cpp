@@ -301,6 +301,7 @@ void World::cycle(long steps) {
     ensure_built();
     update_timestep(rebuilt);
     const auto t1 = SteadyClock::now();
+    keep_contact_forces_ = s + 1 == steps;
     compute_contacts();
     const auto t2 = SteadyClock::now();
     phase_seconds_.neighbour_search += seconds(t0, t1);

@@ -342,12 +342,20 @@ private:
   // half skin.
   static constexpr double kUnknownMove = 1e300, kMoveBoundRoom = 0.9;
   double move_bound_m_ = kUnknownMove, last_step_move_m_ = 0.0;
+  // Whether the contact pass keeps every contact's force on its second end
+  // in force_on_2 (the measurements read them between cycle() calls): on the
+  // last step of each call only.
+  bool keep_contact_forces_ = true;
   // Instability report from the contact pass (first offending entry).
   std::uint32_t unstable_entry_ = UINT32_MAX;
   // The threads' blocks of rows in the contact pass and the integration,
   // moved towards equal measured time (engine/work_split.hpp; no effect on
   // the results).
   WorkSplit contact_split_, integration_split_;
+  // The row blocks the last contact pass ran in (team + 1 boundaries): a
+  // contact whose second end lies beyond its row's block leaves its load on
+  // that end in the entry's record, which integrate() adds.
+  std::vector<std::size_t> contact_blocks_;
 };
 
 } // namespace centridem
