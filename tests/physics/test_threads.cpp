@@ -29,11 +29,14 @@ struct RunResult {
   Vec3 floor_force;
   double time = 0;
   double ratio = 0, upper_ratio = 0; // mean unbalanced-force ratio: all, and z > 2 mm
+  long steps = 0;                    // steps run
 };
 
 constexpr double r = 0.5e-3, spacing = 1.06e-3, L = 20 * spacing + 0.2e-3;
 
-RunResult run(int threads) {
+// 300 steps; or, with a stop ratio, cycles until the mean unbalanced-force
+// ratio falls below it (checked every 10 steps, at most max_steps).
+RunResult run(int threads, double stop_ratio = 0.0, long max_steps = 0) {
   WorldSettings s;
   s.threads = threads;
   s.neighbour_skin_m = 0.05e-3;
@@ -53,8 +56,13 @@ RunResult run(int threads) {
   add_lattice(w, 2000, 20, 20, spacing, 0.9 * r, 1.05 * r, paper::density_kg_m3,
               {0.6e-3, 0.6e-3, 0.54e-3}, 0.3, false);
   w.set_body_field(BodyField::scaled_gravity(1000.0, 1.0));
-  w.cycle(300);
   RunResult out;
+  if (stop_ratio > 0.0) {
+    out.steps = w.cycle_until_equilibrium(stop_ratio, max_steps, 10);
+  } else {
+    w.cycle(300);
+    out.steps = 300;
+  }
   const auto& P = w.particles();
   for (std::size_t i = 0; i < P.size(); ++i) {
     out.position[P.id[i]] = P.position[i];
@@ -115,6 +123,26 @@ TEST(PhysicsThreads, OneTwoAndThreeThreadsAgreeBitForBit) {
   EXPECT_GT(a.ratio, 0.0);
   EXPECT_GT(a.upper_ratio, 0.0);
   EXPECT_NE(a.ratio, a.upper_ratio);
+}
+
+// Issue 18, acceptance 3: a run that stops on equilibrium (the ratio below a
+// bound, checked every 10 steps) stops at the same step with 1 and 3 threads,
+// in the same state. The bound is one the settling column reaches after some
+// thousands of steps, well before the cap, so the stop is the ratio's.
+TEST(PhysicsThreads, EquilibriumStopComesAtTheSameStepWithOneAndThreeThreads) {
+  constexpr double stop_ratio = 0.02;
+  constexpr long cap = 40000;
+  const RunResult a = run(1, stop_ratio, cap);
+  const RunResult b = run(3, stop_ratio, cap);
+  RecordProperty("steps_1_thread", static_cast<int>(a.steps));
+  RecordProperty("steps_3_threads", static_cast<int>(b.steps));
+  EXPECT_EQ(b.threads_used, 3) << "the parallel loops did not run on 3 threads";
+  EXPECT_LT(a.steps, cap) << "the column never settled below the ratio: the stop was the cap's";
+  EXPECT_GT(a.steps, 300) << "stopped before the grains met: nothing was settled";
+  EXPECT_LT(a.ratio, stop_ratio);
+  EXPECT_EQ(a.steps, b.steps);
+  EXPECT_EQ(a.ratio, b.ratio);
+  EXPECT_EQ(differing(a.position, b.position), 0u);
 }
 
 } // namespace
