@@ -127,8 +127,8 @@ TEST(PhysicsThreads, OneTwoAndThreeThreadsAgreeBitForBit) {
 
 // Issue 18, acceptance 3: a run that stops on equilibrium (the ratio below a
 // bound, checked every 10 steps) stops at the same step with 1 and 3 threads,
-// in the same state. The bound is one the settling column reaches after some
-// thousands of steps, well before the cap, so the stop is the ratio's.
+// in the same state. The column settles below the bound at step 960, after the
+// grains have met and well before the cap, so the stop is the ratio's.
 TEST(PhysicsThreads, EquilibriumStopComesAtTheSameStepWithOneAndThreeThreads) {
   constexpr double stop_ratio = 0.02;
   constexpr long cap = 40000;
