@@ -15,6 +15,8 @@
 #include <cstring>
 #include <fmt/format.h>
 #include <fstream>
+#include <omp.h>
+#include <sched.h>
 #include <sstream>
 #include <string_view>
 #include <unistd.h>
@@ -222,6 +224,26 @@ int other_runnable_tasks() {
   return least;
 }
 
+// When OMP_PROC_BIND or OMP_PLACES asks for binding, libgomp binds this
+// (initial) thread to the first place as the program loads, and that one-place
+// CPU mask outlives execv: the restarted libgomp would find the other places
+// without a usable CPU, drop them, and run every thread on one CPU (half speed
+// on two cores, found 2026-12-07). So the mask goes back to the CPUs of all
+// the places first. Without binding there are no places and nothing changes.
+void restore_cpus_of_all_places() {
+  const int places = omp_get_num_places();
+  if (places < 2) return;
+  cpu_set_t all;
+  CPU_ZERO(&all);
+  for (int p = 0; p < places; ++p) {
+    std::vector<int> ids(static_cast<std::size_t>(omp_get_place_num_procs(p)));
+    omp_get_place_proc_ids(p, ids.data());
+    for (const int id : ids)
+      if (id >= 0 && id < CPU_SETSIZE) CPU_SET(id, &all);
+  }
+  ::sched_setaffinity(0, sizeof all, &all); // on failure the restart keeps one place
+}
+
 } // namespace
 
 void choose_openmp_wait(char** argv) {
@@ -230,6 +252,7 @@ void choose_openmp_wait(char** argv) {
   // sleeps (and spins not at all when it runs more threads than CPUs).
   if (other_runnable_tasks() == 0 && ::setenv("GOMP_SPINCOUNT", kShortSpinCount, 1) != 0) return;
   if (::setenv("OMP_WAIT_POLICY", "passive", 1) != 0) return;
+  restore_cpus_of_all_places();
   ::execv("/proc/self/exe", argv);
   // Not restarted (no /proc): go on with OpenMP's default policy.
 }

@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <fstream>
 #include <gtest/gtest.h>
+#include <sched.h>
 #include <string>
 #include <thread>
 #include <vector>
@@ -292,6 +293,38 @@ TEST(CommandLine, OpenMPWaitsPassivelyBesideBusyTasksAndKeepsTheUsersSetting) {
   EXPECT_EQ(bench.code, 0) << bench.output;
   EXPECT_TRUE(bench.output.find("openmp_wait: GOMP_SPINCOUNT=1234\n") != std::string::npos)
       << bench.output;
+}
+
+// Each OMP_PLACES value libgomp prints with OMP_DISPLAY_ENV, in order: once as
+// the program loads and once more after its restart for the wait policy.
+std::vector<std::string> places_printed(const std::string& out) {
+  std::vector<std::string> found;
+  const std::string key = "OMP_PLACES = '";
+  for (auto p = out.find(key); p != std::string::npos; p = out.find(key, p + 1)) {
+    const auto b = p + key.size();
+    found.push_back(out.substr(b, out.find('\'', b) - b));
+  }
+  return found;
+}
+
+// A user who binds threads (OMP_PROC_BIND, OMP_PLACES) keeps every place
+// through the restart that sets the wait policy: libgomp binds the first
+// thread to the first place as the program loads, and before the fix the
+// restarted program saw one CPU and ran all its threads there.
+TEST(CommandLine, ThreadBindingKeepsEveryPlaceThroughTheRestart) {
+  cpu_set_t mask;
+  ASSERT_EQ(::sched_getaffinity(0, sizeof mask, &mask), 0);
+  if (CPU_COUNT(&mask) < 2) GTEST_SKIP() << "needs two CPUs to bind to";
+  TempDir dir("centridem_cli_bind");
+  const auto r = run_centridem({"--version"}, dir / "log", 60,
+                               {"OMP_WAIT_POLICY", "GOMP_SPINCOUNT", "OMP_PROC_BIND=spread",
+                                "OMP_PLACES=threads", "OMP_DISPLAY_ENV=true"});
+  EXPECT_EQ(r.code, 0) << r.output;
+  const std::vector<std::string> places = places_printed(r.output);
+  ASSERT_EQ(places.size(), 2u) << "loaded, then restarted once:\n" << r.output;
+  EXPECT_EQ(places.back(), places.front()) << r.output;
+  EXPECT_NE(places.back().find(','), std::string::npos) << "two places or more: " << r.output;
+  EXPECT_EQ(r.output.find("Number of places reduced"), std::string::npos) << r.output;
 }
 
 // A speed means little without the machine that made it: the benchmark names
