@@ -246,13 +246,23 @@ TEST(CommandLine, MistakesOfUnitAndDuplicatesAreCaughtBeforeWork) {
   EXPECT_FALSE(fs::exists(dir / "g" / "specimen.vtu"));
 }
 
+// Each value of NAME that libgomp prints with OMP_DISPLAY_ENV, in order (once as
+// the program loads, once more after its restart for the wait policy).
+std::vector<std::string> values_printed(const std::string& out, const std::string& name) {
+  std::vector<std::string> found;
+  const std::string key = name + " = '";
+  for (auto p = out.find(key); p != std::string::npos; p = out.find(key, p + 1)) {
+    const auto b = p + key.size();
+    found.push_back(out.substr(b, out.find('\'', b) - b));
+  }
+  return found;
+}
+
 // The last GOMP_SPINCOUNT that libgomp prints with OMP_DISPLAY_ENV=verbose: "0" under the
 // passive policy, 3000 for centridem's short spin, 300000 or more when the threads spin long.
 std::string spin_count(const std::string& out) {
-  const auto p = out.rfind("GOMP_SPINCOUNT = '");
-  if (p == std::string::npos) return "(not printed)";
-  const auto b = p + 18;
-  return out.substr(b, out.find('\'', b) - b);
+  const std::vector<std::string> v = values_printed(out, "GOMP_SPINCOUNT");
+  return v.empty() ? "(not printed)" : v.back();
 }
 
 // Beside busy tasks the program's threads wait passively (the choice is made
@@ -295,18 +305,6 @@ TEST(CommandLine, OpenMPWaitsPassivelyBesideBusyTasksAndKeepsTheUsersSetting) {
       << bench.output;
 }
 
-// Each OMP_PLACES value libgomp prints with OMP_DISPLAY_ENV, in order: once as
-// the program loads and once more after its restart for the wait policy.
-std::vector<std::string> places_printed(const std::string& out) {
-  std::vector<std::string> found;
-  const std::string key = "OMP_PLACES = '";
-  for (auto p = out.find(key); p != std::string::npos; p = out.find(key, p + 1)) {
-    const auto b = p + key.size();
-    found.push_back(out.substr(b, out.find('\'', b) - b));
-  }
-  return found;
-}
-
 // A user who binds threads (OMP_PROC_BIND, OMP_PLACES) keeps every place
 // through the restart that sets the wait policy: libgomp binds the first
 // thread to the first place as the program loads, and before the fix the
@@ -320,7 +318,7 @@ TEST(CommandLine, ThreadBindingKeepsEveryPlaceThroughTheRestart) {
                                {"OMP_WAIT_POLICY", "GOMP_SPINCOUNT", "OMP_PROC_BIND=spread",
                                 "OMP_PLACES=threads", "OMP_DISPLAY_ENV=true"});
   EXPECT_EQ(r.code, 0) << r.output;
-  const std::vector<std::string> places = places_printed(r.output);
+  const std::vector<std::string> places = values_printed(r.output, "OMP_PLACES");
   ASSERT_EQ(places.size(), 2u) << "loaded, then restarted once:\n" << r.output;
   EXPECT_EQ(places.back(), places.front()) << r.output;
   EXPECT_NE(places.back().find(','), std::string::npos) << "two places or more: " << r.output;
