@@ -31,6 +31,7 @@
 #include "physics/lanes.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <omp.h>
 
@@ -409,6 +410,9 @@ template <bool Periodic> void World::compute_contacts_impl() {
           P.moment[j] += m2;
         } else {
           bb_.moment_on_2[e] = m2;
+          // Two threads of earlier blocks may flag the same j (atomic, so
+          // that this is no data race; a plain byte store on x86).
+          std::atomic_ref<std::uint8_t>(bb_.record_waits[j]).store(1, std::memory_order_relaxed);
         }
       }
     };

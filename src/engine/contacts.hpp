@@ -44,6 +44,12 @@ struct BallBallContacts {
   std::vector<std::uint32_t> incoming_offset; // size n+1
   std::vector<std::uint32_t> incoming;        // entry indices
   std::vector<std::uint32_t> slot_row;        // particle i of slot k's entry (its first end)
+  // For particle j: 1 when the contact pass left a record in force_on_2 /
+  // moment_on_2 for it (a contact from an earlier block in force), so that
+  // integrate() reads j's incoming slots only then; integrate() clears it.
+  // An unflagged particle's slots all hold +0 (which changes a sum only when
+  // it is -0); one thread, which leaves no records, adds none either.
+  std::vector<std::uint8_t> record_waits; // size n
 
   std::size_t entries() const { return other.size(); }
   static constexpr std::size_t bytes_per_entry() {

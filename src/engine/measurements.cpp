@@ -285,7 +285,7 @@ std::size_t World::bytes_per_particle() const {
       cap(p_.radius) + cap(p_.mass) + cap(p_.inertia) + cap(p_.id) + cap(p_.group) + cap(p_.flags);
   bytes += cap(bb_.row_offset) + cap(bb_.other) + cap(bb_.properties) + cap(bb_.state) +
            cap(bb_.force_on_2) + cap(bb_.moment_on_2) + cap(bb_.incoming_offset) +
-           cap(bb_.incoming) + cap(bb_.slot_row);
+           cap(bb_.incoming) + cap(bb_.slot_row) + cap(bb_.record_waits);
   bytes += cap(bw_.row_offset) + cap(bw_.wall) + cap(bw_.properties) + cap(bw_.state) +
            cap(bw_.force_on_wall);
   bytes += cap(timestep_scratch_.end2_share) + cap(timestep_scratch_.row_sum) +

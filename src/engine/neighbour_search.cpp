@@ -438,6 +438,7 @@ void World::rebuild(std::vector<std::uint32_t> candidates) {
         bb.slot_row[k] = static_cast<std::uint32_t>(i);
       }
   }
+  bb.record_waits.assign(n, 0); // the records are all +0 again
 
   bb_ = std::move(bb);
   bw_ = std::move(bw);
