@@ -291,15 +291,13 @@ template <bool Periodic> void World::compute_contacts_impl() {
   std::uint32_t unstable = UINT32_MAX;
   const int threads = thread_count(settings_, n);
   contact_split_.prepare(threads, n);
-  row_claims_.prepare(contact_split_, threads, n);
   int used_team = 1;
 
   // Each thread takes one contiguous block of rows: the particles are in cell
   // order, so most neighbours j of a row i lie in the same block and their
   // cache lines stay with one core (chunks of 256 rows dealt in turn gave
   // 1.6x from 1 to 2 threads; contiguous blocks 1.9x). The blocks follow the
-  // measured time of each, and a thread that ends its block early takes
-  // rows left in another's (engine/work_split.hpp). The row owner i sums
+  // measured time of each (engine/work_split.hpp). The row owner i sums
   // its own side and adds the force and moment on j to j's sums when j is in
   // its block, or leaves them in the entry's record, which integrate() adds
   // after the pass. No two threads write the same memory, and no sum depends
@@ -309,6 +307,8 @@ template <bool Periodic> void World::compute_contacts_impl() {
     const int team = omp_get_num_threads();
     const int me = omp_get_thread_num();
     const double t_start = team > 1 ? omp_get_wtime() : 0.0;
+    const auto [first_row, end] = contact_split_.block(me, team, n);
+    const std::size_t keep_from = std::min(end, keep_all);
     static thread_local ContactStage stage;
     static thread_local WallStage wall_stage;
     // The passes, defined in the parallel region so that `unstable` is this
@@ -391,9 +391,7 @@ template <bool Periodic> void World::compute_contacts_impl() {
         P.moment[row] = sum.moment;
       }
     };
-    // `end`: the end of the block being walked; `keep_from`: the row from
-    // which the forces on second ends are kept.
-    auto apply_staged = [&](const ContactStage& s, std::size_t end, std::size_t keep_from) {
+    auto apply_staged = [&](const ContactStage& s) {
       for (std::uint32_t k = 0; k < s.count; ++k) {
         const std::uint32_t e = s.entry[k], row = s.row[k];
         if (s.status[k] != kInForce && !end_or_flag(s, k)) continue;
@@ -468,82 +466,57 @@ template <bool Periodic> void World::compute_contacts_impl() {
       }
     };
 
-    // This thread's block; with more than one thread its rows are claimed as
-    // it goes, and then it takes rows left in the others' blocks
-    // (engine/work_split.hpp, RowClaims). Each block is walked downwards
-    // from its end: rows at or above `limit` are this thread's, rows below
-    // it only as it claims them (`claiming`: its own block, shared).
-    const auto [first_row, block_end] = contact_split_.block(me, team, n);
-    const bool share = team > 1 && team == threads;
-    if (share) contact_split_.begin_thefts(me);
-    std::size_t end = block_end, limit = share ? block_end : first_row;
-    bool claiming = share;
-    int victim = -1; // whose block this one was (-1: this thread's own)
-    double t_block = t_start;
-    for (;;) {
-      const std::size_t keep_from = std::min(end, keep_all);
-      std::size_t top = end; // rows top .. end - 1 are done
-      while (top > limit || (claiming && row_claims_.claim(me, limit))) {
-        const std::size_t i = top - 1;
-        const std::uint32_t row_length = bb_.row_offset[i + 1] - bb_.row_offset[i];
-        if (row_length > kStage || bw_.row_offset[i + 1] - bw_.row_offset[i] > kStage) {
-          --top;
-          // A row longer than the stage (a large grain among fine ones): its
-          // entries go through the stage kStage at a time, its sums carried on
-          // across the pieces in entry order; then its ball-wall entries alike.
-          start_rows(i, i + 1);
-          for (std::uint32_t e0 = bw_.row_offset[i]; e0 < bw_.row_offset[i + 1]; e0 += kStage) {
-            const std::uint32_t e1 = std::min(bw_.row_offset[i + 1], e0 + kStage);
-            wall_stage.count = 0;
-            find_walls(i, e0, e1, wall_stage);
-            wall_stage_law_all(wall_stage, props, dt);
-            apply_wall_staged(wall_stage);
-          }
-          for (std::uint32_t e0 = bb_.row_offset[i]; e0 < bb_.row_offset[i + 1]; e0 += kStage) {
-            const std::uint32_t e1 = std::min(bb_.row_offset[i + 1], e0 + kStage);
-            stage.count = 0;
-            find(i, e0, e1, stage);
-            stage_law_all(stage, props, dt, max_overlap);
-            apply_staged(stage, end, keep_from);
-          }
-          continue;
+    std::size_t top = end; // rows top .. end - 1 are done
+    while (top > first_row) {
+      const std::size_t i = top - 1;
+      const std::uint32_t row_length = bb_.row_offset[i + 1] - bb_.row_offset[i];
+      if (row_length > kStage || bw_.row_offset[i + 1] - bw_.row_offset[i] > kStage) {
+        --top;
+        // A row longer than the stage (a large grain among fine ones): its
+        // entries go through the stage kStage at a time, its sums carried on
+        // across the pieces in entry order; then its ball-wall entries alike.
+        start_rows(i, i + 1);
+        for (std::uint32_t e0 = bw_.row_offset[i]; e0 < bw_.row_offset[i + 1]; e0 += kStage) {
+          const std::uint32_t e1 = std::min(bw_.row_offset[i + 1], e0 + kStage);
+          wall_stage.count = 0;
+          find_walls(i, e0, e1, wall_stage);
+          wall_stage_law_all(wall_stage, props, dt);
+          apply_wall_staged(wall_stage);
         }
-        // Stage whole rows while they surely fit (a row stages at most its
-        // entries), run the law on them, then apply them.
-        stage.count = 0;
-        wall_stage.count = 0;
-        const std::size_t last = top;
-        while (top > limit || (claiming && row_claims_.claim(me, limit))) {
-          const std::size_t row = top - 1;
-          if (stage.count + (bb_.row_offset[row + 1] - bb_.row_offset[row]) > kStage ||
-              wall_stage.count + (bw_.row_offset[row + 1] - bw_.row_offset[row]) > kStage)
-            break;
-          find(row, bb_.row_offset[row], bb_.row_offset[row + 1], stage);
-          if (bw_.row_offset[row] != bw_.row_offset[row + 1])
-            find_walls(row, bw_.row_offset[row], bw_.row_offset[row + 1], wall_stage);
-          --top;
+        for (std::uint32_t e0 = bb_.row_offset[i]; e0 < bb_.row_offset[i + 1]; e0 += kStage) {
+          const std::uint32_t e1 = std::min(bb_.row_offset[i + 1], e0 + kStage);
+          stage.count = 0;
+          find(i, e0, e1, stage);
+          stage_law_all(stage, props, dt, max_overlap);
+          apply_staged(stage);
         }
-        stage_law_all(stage, props, dt, max_overlap);
-        wall_stage_law_all(wall_stage, props, dt);
-        start_rows(top, last);
-        apply_wall_staged(wall_stage);
-        apply_staged(stage, end, keep_from);
+        continue;
       }
-      const double t_now = team > 1 ? omp_get_wtime() : 0.0;
-      if (victim < 0) {
-        if (team > 1) contact_split_.record(me, t_now - t_start);
-      } else {
-        contact_split_.record_theft(me, victim, t_now - t_block);
+      // Stage whole rows while they surely fit (a row stages at most its
+      // entries), run the law on them, then apply them.
+      stage.count = 0;
+      wall_stage.count = 0;
+      const std::size_t last = top;
+      while (top > first_row) {
+        const std::size_t row = top - 1;
+        if (stage.count + (bb_.row_offset[row + 1] - bb_.row_offset[row]) > kStage ||
+            wall_stage.count + (bw_.row_offset[row + 1] - bw_.row_offset[row]) > kStage)
+          break;
+        find(row, bb_.row_offset[row], bb_.row_offset[row + 1], stage);
+        if (bw_.row_offset[row] != bw_.row_offset[row + 1])
+          find_walls(row, bw_.row_offset[row], bw_.row_offset[row + 1], wall_stage);
+        --top;
       }
-      std::size_t taken_first = 0, taken_end = 0;
-      if (!share || !row_claims_.take(me, taken_first, taken_end, victim)) break;
-      end = taken_end, limit = taken_first, claiming = false, t_block = t_now;
+      stage_law_all(stage, props, dt, max_overlap);
+      wall_stage_law_all(wall_stage, props, dt);
+      start_rows(top, last);
+      apply_wall_staged(wall_stage);
+      apply_staged(stage);
     }
+    if (team > 1) contact_split_.record(me, omp_get_wtime() - t_start);
     if (me == 0) used_team = team;
   }
   contact_split_.bounds(used_team, n, contact_blocks_);
-  row_claims_.boundaries(contact_blocks_);
-  contact_rows_taken_ += row_claims_.rows_taken();
   contact_split_.rebalance();
   unstable_entry_ = unstable;
 }

@@ -236,15 +236,6 @@ public:
   // OpenMP threads that ran the last step's integration (1 below 2,000
   // particles; see engine/thread_count.hpp).
   int threads_used() const { return threads_used_; }
-  // Rows of the contact pass that a thread took from another's block after
-  // finishing its own, since construction (engine/work_split.hpp, RowClaims;
-  // no effect on the results).
-  std::uint64_t contact_rows_taken() const { return contact_rows_taken_; }
-  // Test hook: start the contact pass's blocks at these row boundaries
-  // (team + 1 of them, 0 first and the particle count last).
-  void set_contact_blocks_for_testing(std::vector<std::size_t> bounds) {
-    contact_split_.set_bounds(std::move(bounds));
-  }
 
   // Forces a rebuild of the neighbour lists (and re-sort) before the next step.
   void request_rebuild() { dirty_ = true; }
@@ -361,8 +352,6 @@ private:
   // moved towards equal measured time (engine/work_split.hpp; no effect on
   // the results).
   WorkSplit contact_split_, integration_split_;
-  RowClaims row_claims_; // the contact pass's rows, handed out as it runs
-  std::uint64_t contact_rows_taken_ = 0;
   // The row blocks the last contact pass ran in (team + 1 boundaries): a
   // contact whose second end lies beyond its row's block leaves its load on
   // that end in the entry's record, which integrate() adds.

@@ -82,7 +82,6 @@ BenchResult run_bench(const BenchOptions& o, int threads) {
   const long rebuilds_before = world.neighbour_rebuilds();
   const World::PhaseSeconds before = world.phase_seconds();
   const auto t0 = std::chrono::steady_clock::now();
-  const std::uint64_t taken_before = world.contact_rows_taken();
   world.cycle(o.steps);
   const auto t1 = std::chrono::steady_clock::now();
   const World::PhaseSeconds after = world.phase_seconds();
@@ -103,8 +102,6 @@ BenchResult run_bench(const BenchOptions& o, int threads) {
   r.skin_m = world.skin();
   r.particle_steps_per_s =
       static_cast<double>(r.particles) * static_cast<double>(o.steps) / r.wall_seconds;
-  r.share_rows_taken = static_cast<double>(world.contact_rows_taken() - taken_before) /
-                       (static_cast<double>(r.particles) * static_cast<double>(o.steps));
   if (r.wall_seconds > 0) {
     r.share_neighbour_search = (after.neighbour_search - before.neighbour_search) / r.wall_seconds;
     r.share_contact_pass = (after.contact_pass - before.contact_pass) / r.wall_seconds;

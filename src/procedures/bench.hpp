@@ -53,9 +53,6 @@ struct BenchResult {
   double particle_steps_per_s = 0;
   // Shares of the timed steps' wall time [-].
   double share_neighbour_search = 0, share_contact_pass = 0, share_integration = 0;
-  // Share of the contact pass's rows a thread took from another's block after
-  // finishing its own, over the timed steps [-] (0 on one thread).
-  double share_rows_taken = 0;
 };
 
 BenchResult run_bench(const BenchOptions& options, int threads);

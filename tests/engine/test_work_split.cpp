@@ -10,11 +10,9 @@
 
 #include <gtest/gtest.h>
 
-#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <functional>
-#include <vector>
 
 using namespace centridem;
 
@@ -96,64 +94,4 @@ TEST(WorkSplit, AnUntimedBlockLeavesTheSplitAlone) {
   s.record(0, 1.0); // thread 1 not timed (a pass on fewer threads than asked)
   s.rebalance();
   EXPECT_EQ(s.block(0, 2, 1000).second, 500u);
-}
-
-// The contact pass's rows handed out as it runs (RowClaims): owners claim
-// their blocks from the top, threads done with theirs take the lower half of
-// the largest range left. Played here in one thread, the claims of 3 threads
-// interleaved in a fixed pseudo-random order over 10,000 rows: every row is
-// handed out exactly once, an owner's claims run downwards without gaps, a
-// taken range is at least kClaimRows rows, and the boundaries reported to the
-// integration are the split's and each taken range's upper end.
-TEST(RowClaims, EveryRowIsHandedOutOnceAndEachTakenRangeIsABlock) {
-  const std::size_t n = 10000;
-  WorkSplit split;
-  split.set_bounds({0, 1000, 2500, n}); // far from equal: threads 0 and 1 finish first
-  RowClaims claims;
-  claims.prepare(split, 3, n);
-  std::vector<int> owner(n, -1);
-  std::vector<std::size_t> limit{1000, 2500, n}; // each owner's claimed bottom
-  std::vector<bool> own_done(3, false);
-  std::vector<std::pair<std::size_t, std::size_t>> taken;
-  unsigned state = 12345;
-  auto next = [&] { return (state = state * 1103515245u + 12345u) >> 16; };
-  for (int round = 0; round < 100000; ++round) {
-    const int me = static_cast<int>(next() % 3);
-    if (!own_done[static_cast<std::size_t>(me)]) {
-      std::size_t& lim = limit[static_cast<std::size_t>(me)];
-      const std::size_t before = lim;
-      if (!claims.claim(me, lim)) {
-        own_done[static_cast<std::size_t>(me)] = true;
-        continue;
-      }
-      EXPECT_LT(lim, before);
-      EXPECT_LE(before - lim, RowClaims::kClaimRows);
-      for (std::size_t i = lim; i < before; ++i) {
-        EXPECT_EQ(owner[i], -1) << "row " << i << " handed out twice";
-        owner[i] = me;
-      }
-    } else {
-      std::size_t first = 0, end = 0;
-      int victim = -1;
-      if (!claims.take(me, first, end, victim)) continue;
-      EXPECT_NE(victim, me);
-      EXPECT_GE(end - first, RowClaims::kClaimRows);
-      taken.emplace_back(first, end);
-      for (std::size_t i = first; i < end; ++i) {
-        EXPECT_EQ(owner[i], -1) << "row " << i << " handed out twice";
-        owner[i] = 10 + me;
-      }
-    }
-  }
-  EXPECT_EQ(std::count(owner.begin(), owner.end(), -1), 0) << "rows never handed out";
-  ASSERT_FALSE(taken.empty()) << "no range was taken: the test did not exercise take()";
-  std::size_t rows = 0;
-  std::vector<std::size_t> want{0, 1000, 2500, n};
-  for (const auto& [first, end] : taken) rows += end - first, want.push_back(end);
-  std::sort(want.begin(), want.end());
-  EXPECT_EQ(claims.rows_taken(), rows);
-  std::vector<std::size_t> blocks;
-  split.bounds(3, n, blocks);
-  claims.boundaries(blocks);
-  EXPECT_EQ(blocks, want);
 }

@@ -30,17 +30,13 @@ struct RunResult {
   double time = 0;
   double ratio = 0, upper_ratio = 0; // mean unbalanced-force ratio: all, and z > 2 mm
   long steps = 0;                    // steps run
-  std::uint64_t rows_taken = 0;      // contact-pass rows taken from another thread's block
 };
 
 constexpr double r = 0.5e-3, spacing = 1.06e-3, L = 20 * spacing + 0.2e-3;
 
 // 300 steps; or, with a stop ratio, cycles until the mean unbalanced-force
 // ratio falls below it (checked every 10 steps, at most max_steps).
-// `blocks`: where the contact pass's blocks start (team + 1 row boundaries;
-// empty: equal blocks).
-RunResult run(int threads, double stop_ratio = 0.0, long max_steps = 0,
-              std::vector<std::size_t> blocks = {}) {
+RunResult run(int threads, double stop_ratio = 0.0, long max_steps = 0) {
   WorldSettings s;
   s.threads = threads;
   s.neighbour_skin_m = 0.05e-3;
@@ -60,7 +56,6 @@ RunResult run(int threads, double stop_ratio = 0.0, long max_steps = 0,
   add_lattice(w, 2000, 20, 20, spacing, 0.9 * r, 1.05 * r, paper::density_kg_m3,
               {0.6e-3, 0.6e-3, 0.54e-3}, 0.3, false);
   w.set_body_field(BodyField::scaled_gravity(1000.0, 1.0));
-  if (!blocks.empty()) w.set_contact_blocks_for_testing(std::move(blocks));
   RunResult out;
   if (stop_ratio > 0.0) {
     out.steps = w.cycle_until_equilibrium(stop_ratio, max_steps, 10);
@@ -75,7 +70,6 @@ RunResult run(int threads, double stop_ratio = 0.0, long max_steps = 0,
     out.spin[P.id[i]] = P.spin[i];
   }
   out.threads_used = w.threads_used();
-  out.rows_taken = w.contact_rows_taken();
   out.rebuilds = w.neighbour_rebuilds();
   out.time = w.time();
   const Measurements m = w.measure();
@@ -129,31 +123,6 @@ TEST(PhysicsThreads, OneTwoAndThreeThreadsAgreeBitForBit) {
   EXPECT_GT(a.ratio, 0.0);
   EXPECT_GT(a.upper_ratio, 0.0);
   EXPECT_NE(a.ratio, a.upper_ratio);
-}
-
-// The contact pass hands its rows out as it runs (engine/work_split.hpp,
-// RowClaims): a thread done with its block takes the lower half of what is
-// left of another's. Started with blocks far from equal cost (the first
-// thread 40 of the 2,000 rows, and with 3 threads the second 40 more), the
-// threads that finish early take rows from the last one's block for many
-// steps, so contacts cross many more block boundaries than usual. The results
-// are still those of one thread, bit for bit, and rows were taken.
-TEST(PhysicsThreads, RowsTakenFromAnotherThreadsBlockLeaveTheBitsAlone) {
-  const RunResult a = run(1);
-  for (const std::vector<std::size_t>& blocks :
-       {std::vector<std::size_t>{0, 40, 2000}, std::vector<std::size_t>{0, 40, 80, 2000}}) {
-    const int threads = static_cast<int>(blocks.size()) - 1;
-    const RunResult b = run(threads, 0.0, 0, blocks);
-    SCOPED_TRACE(testing::Message() << threads << " threads");
-    EXPECT_EQ(b.threads_used, threads) << "the parallel loops did not run on that many threads";
-    EXPECT_GT(b.rows_taken, 0u) << "no thread took rows from another's block";
-    EXPECT_EQ(differing(a.position, b.position), 0u);
-    EXPECT_EQ(differing(a.velocity, b.velocity), 0u);
-    EXPECT_EQ(differing(a.spin, b.spin), 0u);
-    EXPECT_TRUE(same_bits(a.floor_force, b.floor_force));
-    EXPECT_EQ(a.ratio, b.ratio);
-  }
-  EXPECT_EQ(a.rows_taken, 0u); // one thread has no one to take from
 }
 
 // Issue 18, acceptance 3: a run that stops on equilibrium (the ratio below a
