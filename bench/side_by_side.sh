@@ -46,8 +46,11 @@ trap 'rm -rf "$out"' EXIT
 # centridem bench ... -> its particle_steps_per_s
 centridem_run() { # cores, args...
   local cores="$1"; shift
-  taskset -c "$cores" "$bin" bench "${pk[@]}" "$@" | awk '/^particle_steps_per_s:/{print $2}'
+  taskset -c "$cores" "$bin" bench "${pk[@]}" "$@" | tee "$out/last" | awk '/^particle_steps_per_s:/{print $2}'
 }
+# The last run's wait for the slowest thread (both passes' wait_share summed; nan from a build
+# that does not print it).
+last_wait() { awk '/^wait_share_/{s += $2; n++} END{print n ? s : "nan"}' "$out/last"; }
 peer_run() { # steps warmup codes -> one value per code, in order
   taskset -c 0 bash "$here/run_peers.sh" "${pk[@]}" --steps "$1" --warmup "$2" --codes "$3" \
     --procs 1 2>/dev/null | sed -E 's/.*particle_steps_per_s=([^ ]+).*/\1/'
@@ -67,7 +70,9 @@ for r in $(seq 1 "$rounds"); do
   rec c1 "$r" "$(centridem_run 0 --law peers --threads 1 --steps "$psteps")"
   rec c1s "$r" "$(centridem_run 0 --law peers --threads 1 --steps "$psteps" --skin 5e-5)"
   rec c2 "$r" "$(centridem_run 0,1 --law peers --threads 2 --steps "$psteps")"
+  rec c2w "$r" "$(last_wait)"
   rec c2s "$r" "$(centridem_run 0,1 --law peers --threads 2 --steps "$psteps" --skin 5e-5)"
+  rec c2sw "$r" "$(last_wait)"
   rec paper "$r" "$(centridem_run 0 --law paper --threads 1 --steps "$psteps")"
   mapfile -t pv < <(peer_run "$psteps" 200 "liggghts_rolling lammps")
   rec liggghts "$r" "${pv[0]}"
@@ -96,6 +101,9 @@ print(f"| peers' law, packed, 1 thread | {show(row('c1'))} | {show(row('c1s'))} 
       f"{ratio([vals['c1'][r] / p for r, p in zip(R, peer)])} / {ratio([vals['c1s'][r] / p for r, p in zip(R, peer)])} |")
 print(f"| peers' law, packed, 2 threads | {show(row('c2'))} | {show(row('c2s'))} | | | "
       f"{ratio([vals['c2'][r] / vals['c1'][r] for r in R])} / {ratio([vals['c2s'][r] / vals['c1s'][r] for r in R])} |")
+print(f"| peers' law, packed, 2 threads: share of the time the threads waited for the slowest | "
+      + " | ".join(f"{st.median(row(k)):.4f} (" + ", ".join(f"{v:.4f}" for v in row(k)) + ")" for k in ("c2w", "c2sw"))
+      + " | | | |")
 print(f"| paper's law, packed, 1 thread | {show(row('paper'))} | | | | |")
 print(f"| flowing column, 1 core | {show(row('f1'))} | {show(row('f1s'))} | | {show(row('lammps_flow'))} | "
       f"{ratio([vals['f1'][r] / vals['lammps_flow'][r] for r in R])} / {ratio([vals['f1s'][r] / vals['lammps_flow'][r] for r in R])} |")

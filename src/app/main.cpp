@@ -33,12 +33,14 @@ int run_bench_command(const BenchOptions& o) {
         "bytes_per_particle: {}\nskin_m: {:.4g}\nneighbour_rebuilds: {}\n"
         "particle_steps_per_s: {:.4g}\n"
         "time_share_neighbour_search: {:.3f}\ntime_share_contact_pass: {:.3f}\n"
-        "time_share_integration: {:.3f}\nopenmp_wait: {}\ncpu: {}\nsimd: {}\n\n",
+        "time_share_integration: {:.3f}\nwait_share_contact_pass: {:.4f}\n"
+        "wait_share_integration: {:.4f}\nopenmp_wait: {}\ncpu: {}\nsimd: {}\n\n",
         to_string(o.law), to_string(o.workload), r.threads, r.particles, r.steps, r.wall_seconds,
         r.contacts_per_particle, r.ball_ball_contacts_per_particle, r.neighbours_per_particle,
         r.bytes_per_particle, r.skin_m, r.rebuilds, r.particle_steps_per_s,
         r.share_neighbour_search, r.share_contact_pass, r.share_integration,
-        cli::openmp_wait_in_use(), cli::cpu_model(), cli::simd_in_use());
+        r.share_contact_pass_wait, r.share_integration_wait, cli::openmp_wait_in_use(),
+        cli::cpu_model(), cli::simd_in_use());
     std::fflush(stdout);
   }
   return 0;

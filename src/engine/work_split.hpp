@@ -63,11 +63,13 @@ public:
   void rebalance() {
     const std::size_t t = busy_s_.size();
     if (t < 2 || bound_.size() != t + 1) return;
-    double total = 0.0;
+    double total = 0.0, slowest = 0.0;
     for (double s : busy_s_) {
       if (!(s > 0.0)) return; // a block not timed (first pass, an empty block)
       total += s;
+      slowest = std::max(slowest, s);
     }
+    waited_s_ += slowest - total / static_cast<double>(t);
     std::vector<std::size_t> next(bound_);
     std::size_t k = 0;   // the block the target lies in
     double before = 0.0; // cost of the blocks before block k [s]
@@ -84,9 +86,17 @@ public:
     bound_ = std::move(next);
   }
 
+  // The time the threads waited for the slowest at the end of the passes
+  // since construction, averaged over the team: the sum over timed passes of
+  // the slowest block's time minus the mean block time [s] (0 with one
+  // thread). What a pass loses to unequal blocks, be it the split or a core
+  // slowed by other work; the bench prints it as a share of the wall time.
+  double waited_seconds() const { return waited_s_; }
+
 private:
   std::vector<std::size_t> bound_; // team + 1 row boundaries
   std::vector<double> busy_s_;     // each thread's time in its block at the last pass [s]
+  double waited_s_ = 0.0;          // see waited_seconds() [s]
 };
 
 } // namespace centridem

@@ -231,8 +231,18 @@ public:
   // clock reads per phase and step, nothing per particle.
   struct PhaseSeconds {
     double neighbour_search = 0, contact_pass = 0, integration = 0;
+    // Of the contact pass's and the integration's time, what the threads
+    // spent waiting for the slowest at the end of each pass, averaged over
+    // the team (engine/work_split.hpp, WorkSplit::waited_seconds; 0 with one
+    // thread).
+    double contact_pass_wait = 0, integration_wait = 0;
   };
-  const PhaseSeconds& phase_seconds() const { return phase_seconds_; }
+  PhaseSeconds phase_seconds() const {
+    PhaseSeconds s = phase_seconds_;
+    s.contact_pass_wait = contact_split_.waited_seconds();
+    s.integration_wait = integration_split_.waited_seconds();
+    return s;
+  }
   // OpenMP threads that ran the last step's integration (1 below 2,000
   // particles; see engine/thread_count.hpp).
   int threads_used() const { return threads_used_; }

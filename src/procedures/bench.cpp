@@ -106,6 +106,9 @@ BenchResult run_bench(const BenchOptions& o, int threads) {
     r.share_neighbour_search = (after.neighbour_search - before.neighbour_search) / r.wall_seconds;
     r.share_contact_pass = (after.contact_pass - before.contact_pass) / r.wall_seconds;
     r.share_integration = (after.integration - before.integration) / r.wall_seconds;
+    r.share_contact_pass_wait =
+        (after.contact_pass_wait - before.contact_pass_wait) / r.wall_seconds;
+    r.share_integration_wait = (after.integration_wait - before.integration_wait) / r.wall_seconds;
   }
   return r;
 }

@@ -53,6 +53,9 @@ struct BenchResult {
   double particle_steps_per_s = 0;
   // Shares of the timed steps' wall time [-].
   double share_neighbour_search = 0, share_contact_pass = 0, share_integration = 0;
+  // Of those, the threads' mean wait for the slowest at the end of each
+  // contact pass and each integration (World::PhaseSeconds; 0 on 1 thread).
+  double share_contact_pass_wait = 0, share_integration_wait = 0;
 };
 
 BenchResult run_bench(const BenchOptions& options, int threads);

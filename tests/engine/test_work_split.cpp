@@ -95,3 +95,37 @@ TEST(WorkSplit, AnUntimedBlockLeavesTheSplitAlone) {
   s.rebalance();
   EXPECT_EQ(s.block(0, 2, 1000).second, 500u);
 }
+
+TEST(WorkSplit, TheWaitAtAPassEndIsTheSlowestBlockLessTheMean) {
+  WorkSplit s;
+  s.prepare(2, 1000);
+  EXPECT_EQ(s.waited_seconds(), 0.0);
+  // Equal blocks: 1,500 and 500 units, so the faster thread waits 1,000 and
+  // the team, on the mean, 500 = 1,500 - 2,000 / 2.
+  timed_pass(s, 2, 1000, step_cost);
+  EXPECT_DOUBLE_EQ(s.waited_seconds(), 500.0);
+  // Then blocks [0, 479) and [479, 1000): 1,437 and 563 units, 437 more.
+  timed_pass(s, 2, 1000, step_cost);
+  EXPECT_DOUBLE_EQ(s.waited_seconds(), 937.0);
+  // Settled within 8 rows of the equal-cost row, a pass waits at most 3 x 8
+  // units of the mean block's 1,000.
+  for (int k = 0; k < 200; ++k) timed_pass(s, 2, 1000, step_cost);
+  const double before = s.waited_seconds();
+  timed_pass(s, 2, 1000, step_cost);
+  EXPECT_LE(s.waited_seconds() - before, 24.0);
+  // Three threads timed 3, 1 and 2: the slowest 3 less the mean 2.
+  WorkSplit t;
+  t.prepare(3, 30);
+  t.record(0, 3.0), t.record(1, 1.0), t.record(2, 2.0);
+  t.rebalance();
+  EXPECT_DOUBLE_EQ(t.waited_seconds(), 1.0);
+  // A pass with a block not timed adds nothing; nor does one thread.
+  t.record(1, 0.0);
+  t.rebalance();
+  EXPECT_DOUBLE_EQ(t.waited_seconds(), 1.0);
+  WorkSplit one;
+  one.prepare(1, 30);
+  one.record(0, 5.0);
+  one.rebalance();
+  EXPECT_EQ(one.waited_seconds(), 0.0);
+}

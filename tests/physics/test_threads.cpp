@@ -30,6 +30,7 @@ struct RunResult {
   double time = 0;
   double ratio = 0, upper_ratio = 0; // mean unbalanced-force ratio: all, and z > 2 mm
   long steps = 0;                    // steps run
+  World::PhaseSeconds phases;        // the phases' clocks, waits included
 };
 
 constexpr double r = 0.5e-3, spacing = 1.06e-3, L = 20 * spacing + 0.2e-3;
@@ -70,6 +71,7 @@ RunResult run(int threads, double stop_ratio = 0.0, long max_steps = 0) {
     out.spin[P.id[i]] = P.spin[i];
   }
   out.threads_used = w.threads_used();
+  out.phases = w.phase_seconds();
   out.rebuilds = w.neighbour_rebuilds();
   out.time = w.time();
   const Measurements m = w.measure();
@@ -115,7 +117,17 @@ TEST(PhysicsThreads, OneTwoAndThreeThreadsAgreeBitForBit) {
     // The ratio that decides when runs stop: the same bits (issue 18), over all and a part.
     EXPECT_EQ(a.ratio, b.ratio);
     EXPECT_EQ(a.upper_ratio, b.upper_ratio);
+    // The threads' wait for the slowest at the passes' ends (bench's
+    // wait_share_*): counted (two clocks are never equal over 300 steps), and
+    // a part of its phase.
+    EXPECT_GT(b.phases.contact_pass_wait, 0.0);
+    EXPECT_LT(b.phases.contact_pass_wait, b.phases.contact_pass);
+    EXPECT_GT(b.phases.integration_wait, 0.0);
+    EXPECT_LT(b.phases.integration_wait, b.phases.integration);
   }
+  // One thread waits for no other.
+  EXPECT_EQ(a.phases.contact_pass_wait, 0.0);
+  EXPECT_EQ(a.phases.integration_wait, 0.0);
   // Not vacuous: contacts active, re-sorting happened.
   EXPECT_GT(a.rebuilds, 2);
   EXPECT_GT(a.bb_contacts, 50u);
