@@ -2,7 +2,10 @@
 # Two or more centridem builds measured in alternating rounds on the same core(s), so that the
 # machine's slow spells fall on every build alike: one line per run, then each build's median and
 # its ratio to the first build, paired by round (the "before/after" tables of
-# docs/results/bench.md).
+# docs/results/bench.md). Even rounds run the builds in reverse order (A B, B A, A B, ...), so a
+# machine slowing or speeding up through a round favours neither. From 5 rounds on, each ratio
+# comes with a 90 % interval of the paired median (2,000 bootstrap resamples of the rounds, a
+# fixed seed): a difference is shown only when the interval excludes 1.
 #
 # Usage:  bash bench/interleave.sh [--cores 0] [--rounds 4] BIN_A BIN_B [...] -- BENCH ARGS
 #   e.g.  bash bench/interleave.sh /tmp/before/build/centridem ./build/centridem -- \
@@ -40,7 +43,9 @@ source "$(dirname "${BASH_SOURCE[0]}")/cpu_others.sh"
 echo "interleave.sh: $(date -u '+%F %T') UTC, cores $cores, $rounds rounds, bench $*"
 cpu_others_start
 for r in $(seq 1 "$rounds"); do
-  for i in "${!bins[@]}"; do
+  order=("${!bins[@]}")
+  if [ $((r % 2)) -eq 0 ]; then mapfile -t order < <(printf '%s\n' "${order[@]}" | tac); fi
+  for i in "${order[@]}"; do
     v="$(taskset -c "$cores" "${bins[$i]}" bench "$@" | awk '/^particle_steps_per_s:/{print $2}')"
     [ -n "$v" ] || { echo "interleave.sh: '${bins[$i]} bench $*' gave no particle_steps_per_s" >&2; exit 1; }
     [ "$(wc -l <<<"$v")" -eq 1 ] || { echo "interleave.sh: '${bins[$i]} bench $*' gave $(wc -l <<<"$v") figures (one run per thread count?); give --threads" >&2; exit 2; }
@@ -49,7 +54,7 @@ for r in $(seq 1 "$rounds"); do
   done
 done
 python3 - "$vals" "${bins[@]}" <<'PY'
-import sys, statistics as st
+import random, sys, statistics as st
 v = {}
 for line in open(sys.argv[1]):
     i, r, x = line.split()
@@ -61,7 +66,12 @@ for i, n in enumerate(names):
         print(f"{n}: median {m:.4g} particle-steps/s")
     else:
         q = [v[i][r] / v[0][r] for r in sorted(v[0])]
-        print(f"{n}: median {m:.4g}; / first, paired by round: x{st.median(q):.3f} (" +
+        ci = ""
+        if len(q) >= 5:
+            rng = random.Random(1)
+            b = sorted(st.median(rng.choices(q, k=len(q))) for _ in range(2000))
+            ci = f" [90 %: x{b[100]:.3f} to x{b[1899]:.3f}]"
+        print(f"{n}: median {m:.4g}; / first, paired by round: x{st.median(q):.3f}{ci} (" +
               ", ".join(f"{x:.3f}" for x in q) + ")")
 PY
 cpu_others_report interleave.sh

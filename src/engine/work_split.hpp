@@ -59,7 +59,10 @@ public:
   // the row where the cumulative cost (each block's time spread evenly over
   // its rows) reaches its share. The eighth damps the clock's step-to-step
   // noise (a few per cent of a block's time): moved halfway, the boundary
-  // wandered by 2 % of the rows around its place, as much as it gains.
+  // wandered by 2 % of the rows around its place, as much as it gains. A
+  // step growing with the gap (to half the way at 20 %) did not lower the
+  // wait on a noisy host (docs/results/bench.md, 2026-12-07): the gaps there
+  // change from step to step, faster than a split made after the pass.
   void rebalance() {
     const std::size_t t = busy_s_.size();
     if (t < 2 || bound_.size() != t + 1) return;
@@ -70,7 +73,7 @@ public:
       slowest = std::max(slowest, s);
     }
     waited_s_ += slowest - total / static_cast<double>(t);
-    std::vector<std::size_t> next(bound_);
+    next_ = bound_;
     std::size_t k = 0;   // the block the target lies in
     double before = 0.0; // cost of the blocks before block k [s]
     for (std::size_t b = 1; b < t; ++b) {
@@ -81,9 +84,9 @@ public:
                             rows * std::clamp((want - before) / busy_s_[k], 0.0, 1.0);
       const double moved =
           static_cast<double>(bound_[b]) + 0.125 * (target - static_cast<double>(bound_[b]));
-      next[b] = std::clamp(static_cast<std::size_t>(moved), next[b - 1], bound_.back());
+      next_[b] = std::clamp(static_cast<std::size_t>(moved), next_[b - 1], bound_.back());
     }
-    bound_ = std::move(next);
+    bound_.swap(next_);
   }
 
   // The time the threads waited for the slowest at the end of the passes
@@ -96,6 +99,7 @@ public:
 private:
   std::vector<std::size_t> bound_; // team + 1 row boundaries
   std::vector<double> busy_s_;     // each thread's time in its block at the last pass [s]
+  std::vector<std::size_t> next_;  // rebalance()'s new boundaries (kept: no allocation per pass)
   double waited_s_ = 0.0;          // see waited_seconds() [s]
 };
 
