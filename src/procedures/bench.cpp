@@ -103,12 +103,15 @@ BenchResult run_bench(const BenchOptions& o, int threads) {
   r.particle_steps_per_s =
       static_cast<double>(r.particles) * static_cast<double>(o.steps) / r.wall_seconds;
   if (r.wall_seconds > 0) {
-    r.share_neighbour_search = (after.neighbour_search - before.neighbour_search) / r.wall_seconds;
-    r.share_contact_pass = (after.contact_pass - before.contact_pass) / r.wall_seconds;
-    r.share_integration = (after.integration - before.integration) / r.wall_seconds;
-    r.share_contact_pass_wait =
-        (after.contact_pass_wait - before.contact_pass_wait) / r.wall_seconds;
-    r.share_integration_wait = (after.integration_wait - before.integration_wait) / r.wall_seconds;
+    // A phase clock's time over the timed steps, as a share of their wall time.
+    const auto share = [&](double World::PhaseSeconds::*clock) {
+      return (after.*clock - before.*clock) / r.wall_seconds;
+    };
+    r.share_neighbour_search = share(&World::PhaseSeconds::neighbour_search);
+    r.share_contact_pass = share(&World::PhaseSeconds::contact_pass);
+    r.share_integration = share(&World::PhaseSeconds::integration);
+    r.share_contact_pass_wait = share(&World::PhaseSeconds::contact_pass_wait);
+    r.share_integration_wait = share(&World::PhaseSeconds::integration_wait);
   }
   return r;
 }
