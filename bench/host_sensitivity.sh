@@ -61,8 +61,9 @@ python3 - "$out" <<'EOF'
 import math, random, statistics as st, sys
 C, L = [], []
 for line in open(sys.argv[1]):
-    f = line.split()
-    C.append(float(f[4])), L.append(float(f[6]))
+    f = line.split()  # round R HH:MM:SS: centridem C LIGGGHTS L
+    C.append(float(f[4]))
+    L.append(float(f[6]))
 lc, ll = [math.log(x) for x in C], [math.log(x) for x in L]
 n = len(C)
 slope = st.linear_regression(ll, lc).slope
